@@ -1,0 +1,91 @@
+"""Declared model parameters: unit, description, allowed range, validation with a clear error.
+
+Every model keeps its parameters in a frozen dataclass whose fields are made with `parameter()`.
+The FMU layer reads the same metadata to declare the FMI variables, so a parameter's unit,
+description and default are written exactly once.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+# allowed ranges, checked after the finiteness check
+POSITIVE = "positive"
+NONNEGATIVE = "nonnegative"
+ANY = "any"
+FRACTION = "fraction"       # 0 < x < 1
+CHOICE = "choice"           # an integer from `choices`
+
+_RANGE_TEXT = {POSITIVE: "> 0", NONNEGATIVE: ">= 0", FRACTION: "in (0, 1)"}
+
+
+class ParameterError(ValueError):
+    """A parameter value that the model cannot run with; `.name` is the parameter's name."""
+
+    def __init__(self, name: str, message: str):
+        super().__init__(f"parameter {name}: {message}")
+        self.name = name
+
+
+def parameter(default: float, unit: str, description: str, allowed: str = POSITIVE,
+              choices: tuple[int, ...] = ()) -> Any:
+    """A dataclass field that is a model parameter (SI `unit`)."""
+    return field(default=default, metadata=dict(unit=unit, description=description,
+                                                allowed=allowed, choices=choices))
+
+
+@dataclass(frozen=True)
+class ParameterInfo:
+    name: str
+    default: float
+    unit: str
+    description: str
+    allowed: str
+    choices: tuple[int, ...]
+
+    @property
+    def is_integer(self) -> bool:
+        return self.allowed == CHOICE
+
+
+def parameter_info(params_class) -> list[ParameterInfo]:
+    """The declared parameters of a parameter dataclass, in declaration order."""
+    return [ParameterInfo(f.name, f.default, f.metadata["unit"], f.metadata["description"],
+                          f.metadata["allowed"], f.metadata["choices"])
+            for f in fields(params_class) if "unit" in f.metadata]
+
+
+def check_value(info: ParameterInfo, value: Any) -> None:
+    """Raise ParameterError if `value` is not allowed for the parameter."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(info.name, f"expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ParameterError(info.name, f"must be finite, got {value}")
+    if info.allowed == CHOICE:
+        if value not in info.choices:
+            raise ParameterError(info.name, f"must be one of {list(info.choices)}, got {value}")
+        return
+    ok = {POSITIVE: value > 0, NONNEGATIVE: value >= 0, FRACTION: 0 < value < 1,
+          ANY: True}[info.allowed]
+    if not ok:
+        raise ParameterError(info.name, f"must be {_RANGE_TEXT[info.allowed]} {info.unit}, "
+                                        f"got {value}")
+
+
+def validate(params) -> None:
+    """Check every declared parameter of a parameter dataclass instance."""
+    for info in parameter_info(type(params)):
+        check_value(info, getattr(params, info.name))
+
+
+def with_values(params, **values):
+    """A copy of `params` with some values replaced, validated."""
+    known = {info.name for info in parameter_info(type(params))}
+    for name in values:
+        if name not in known:
+            raise ParameterError(name, f"unknown parameter of {type(params).__name__} "
+                                       f"(known: {', '.join(sorted(known))})")
+    new = replace(params, **values)
+    validate(new)
+    return new

@@ -1,0 +1,254 @@
+"""Punch body of the ultrasonic sewing machine: one mass between springs and the fabric.
+
+y is the punch's height above the fabric surface (y < 0: pressing into it), xi(t) the kinematic
+excitation from the linkage, Delta = xi - y the deformation of spring 11 (MECHANISMS.md §1b):
+
+    m·y'' = -F1 + F2 + F3 - m·g
+    F1 = F10 + c1·y + b1·y'                                  closing spring 6
+    F2 = -(c2·y + b2·y')  while y < 0 and that is > 0        fabric: unilateral, non-retaining
+    F3 = F30 + c3·Delta + b3·Delta'                          spring 11 (bilateral, the paper's)
+         or, compression only: F3 only while Delta > 0 and F3 > 0
+
+Between switches the equation is linear with constant coefficients, and within a communication
+step the excitation is the Taylor polynomial xi(τ) = x0 + x1·τ + x2·τ² built from the inputs
+xi, xi', xi''. So each piece is solved exactly (a damped oscillator under polynomial forcing) and
+the switches of contact and of spring 11 are located in time inside the step by bisection on the
+exact solution. No step size limit follows from stability, only from the extrapolation of xi.
+"""
+from __future__ import annotations
+
+import cmath
+import math
+from dataclasses import dataclass
+
+from .parameters import CHOICE, NONNEGATIVE, parameter, validate
+
+GRAVITY = 9.81
+
+# contact and spring switches are searched on sub-intervals of at most this fraction of the
+# shortest natural period, so that a touch-and-go inside one step is not jumped over
+_SAMPLES_PER_PERIOD = 16
+_MAX_SWITCHES_PER_STEP = 64
+_TIME_RESOLUTION = 1e-15           # s; bisection stops below this bracket width
+
+
+@dataclass(frozen=True)
+class PunchContactParams:
+    m: float = parameter(0.063, "kg", "mass of the punch with its holder")
+    F10: float = parameter(20.0, "N", "preload of the closing spring 6", NONNEGATIVE)
+    c1: float = parameter(2000.0, "N/m", "stiffness of the closing spring 6")
+    b1: float = parameter(0.71, "N.s/m", "damping of the closing spring 6", NONNEGATIVE)
+    c2: float = parameter(5.0e4, "N/m", "contact stiffness of the fabric")
+    b2: float = parameter(97.64, "N.s/m", "contact damping of the fabric", NONNEGATIVE)
+    c3: float = parameter(1.0e5, "N/m", "stiffness of spring 11 (slider to stop)")
+    b3: float = parameter(7.10, "N.s/m", "damping of spring 11", NONNEGATIVE)
+    F30: float = parameter(0.0, "N", "preload of spring 11", NONNEGATIVE)
+    compression_only: int = parameter(0, "1", "spring 11: 0 bilateral (the paper's equation), "
+                                      "1 compression only", CHOICE, choices=(0, 1))
+
+
+@dataclass(frozen=True)
+class PunchState:
+    """Everything the punch remembers between steps."""
+    y: float
+    y_dot: float
+    contact: bool          # fabric force F2 active
+    spring_on: bool        # spring 11 transmits force (always True when bilateral)
+    landings: int = 0      # contact onsets so far
+
+
+@dataclass(frozen=True)
+class PunchOutputs:
+    y: float
+    y_dot: float
+    y_ddot: float
+    F1: float
+    F2: float
+    F3: float
+    Delta: float
+    contact: bool
+
+
+class ZenoError(RuntimeError):
+    """Too many contact switches in one step (chattering that the model cannot resolve)."""
+
+
+class _Piece:
+    """Exact solution of m·y'' + b·y' + c·y = f0 + f1·τ + f2·τ² from (y0, v0) at τ = 0."""
+
+    __slots__ = ("m", "b", "c", "f0", "f1", "f2", "p0", "p1", "p2", "l1", "l2", "k1", "k2",
+                 "critical")
+
+    def __init__(self, m, b, c, f0, f1, f2, y0, v0):
+        self.m, self.b, self.c, self.f0, self.f1, self.f2 = m, b, c, f0, f1, f2
+        # particular solution: a quadratic in τ
+        self.p2 = f2 / c
+        self.p1 = (f1 - 2.0 * b * self.p2) / c
+        self.p0 = (f0 - b * self.p1 - 2.0 * m * self.p2) / c
+        e0 = y0 - self.p0
+        de0 = v0 - self.p1
+        disc = b * b - 4.0 * m * c
+        root = cmath.sqrt(disc)
+        self.l1 = (-b + root) / (2.0 * m)
+        self.l2 = (-b - root) / (2.0 * m)
+        self.critical = abs(disc) <= 1e-12 * (b * b + 4.0 * m * c)
+        if self.critical:           # repeated root: (k1 + k2·τ)·exp(l1·τ)
+            self.l1 = self.l2 = -b / (2.0 * m)
+            self.k1, self.k2 = e0, de0 - self.l1 * e0
+        else:
+            self.k2 = (de0 - self.l1 * e0) / (self.l2 - self.l1)
+            self.k1 = e0 - self.k2
+
+    def state(self, tau: float) -> tuple[float, float]:
+        """(y, y') at τ."""
+        py = self.p0 + tau * (self.p1 + tau * self.p2)
+        pv = self.p1 + 2.0 * tau * self.p2
+        if self.critical:
+            ex = math.exp(self.l1.real * tau)
+            e = (self.k1 + self.k2 * tau) * ex
+            de = (self.k2 + self.l1.real * (self.k1 + self.k2 * tau)) * ex
+            return py + e, pv + de
+        x1 = self.k1 * cmath.exp(self.l1 * tau)
+        x2 = self.k2 * cmath.exp(self.l2 * tau)
+        return py + (x1 + x2).real, pv + (self.l1 * x1 + self.l2 * x2).real
+
+
+class PunchContact:
+    """The punch body's dynamics with exact piecewise integration and located switches."""
+
+    def __init__(self, params: PunchContactParams = PunchContactParams()):
+        validate(params)
+        self.p = params
+        stiffest = params.c1 + params.c2 + params.c3
+        self.shortest_period = 2.0 * math.pi * math.sqrt(params.m / stiffest)
+
+    # --- state at the setup position ---------------------------------------------------------
+    def initial_state(self, xi: float, xi_dot: float) -> PunchState:
+        """At rest on the excitation (Delta = 0), with the switches consistent with that state."""
+        contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot, False, True)
+        return PunchState(xi, 0.0, contact, spring_on)
+
+    # --- forces ------------------------------------------------------------------------------
+    def outputs(self, s: PunchState, xi: float, xi_dot: float) -> PunchOutputs:
+        p = self.p
+        f1 = p.F10 + p.c1 * s.y + p.b1 * s.y_dot
+        f2 = max(0.0, -(p.c2 * s.y + p.b2 * s.y_dot)) if s.contact else 0.0
+        delta = xi - s.y
+        f3 = p.F30 + p.c3 * delta + p.b3 * (xi_dot - s.y_dot)
+        if not s.spring_on:
+            f3 = 0.0
+        elif p.compression_only:
+            f3 = max(0.0, f3)
+        a = (-f1 + f2 + f3) / p.m - GRAVITY
+        return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact)
+
+    # --- switching functions: negative while the current flag is consistent -------------------
+    def _contact_g(self, y, v):
+        """< 0 inside the contact set {y < 0 and F2* > 0}."""
+        return max(y, self.p.c2 * y + self.p.b2 * v)
+
+    def _spring_g(self, y, v, xi, xi_dot):
+        """< 0 inside the compression set {Delta > 0 and F3* > 0}."""
+        p = self.p
+        delta = xi - y
+        return max(-delta, -(p.F30 + p.c3 * delta + p.b3 * (xi_dot - v)))
+
+    def _consistent_flags(self, y, v, xi, xi_dot, contact, spring_on):
+        contact = self._contact_g(y, v) < 0.0
+        if self.p.compression_only:
+            spring_on = self._spring_g(y, v, xi, xi_dot) < 0.0
+        else:
+            spring_on = True
+        return contact, spring_on
+
+    # --- one communication step ----------------------------------------------------------------
+    def step(self, s: PunchState, x0: float, x1: float, x2: float, h: float) -> PunchState:
+        """Advance by h under the excitation xi(τ) = x0 + x1·τ + x2·τ², τ in [0, h]."""
+        y, v, contact, spring_on, landings = s.y, s.y_dot, s.contact, s.spring_on, s.landings
+        if self.p.compression_only:
+            # new inputs may have moved the slider: re-decide whether spring 11 bears
+            spring_on = self._spring_g(y, v, x0, x1) < 0.0
+        t0 = 0.0
+        for _ in range(_MAX_SWITCHES_PER_STEP):
+            piece = self._piece(y, v, contact, spring_on, x0, x1, x2, t0)
+            event = self._first_switch(piece, contact, spring_on, x0, x1, x2, t0, h)
+            if event is None:
+                y, v = piece.state(h - t0)
+                return PunchState(y, v, contact, spring_on, landings)
+            t_switch, which = event
+            y, v = piece.state(t_switch - t0)
+            t0 = t_switch
+            if which == "contact":
+                contact = not contact
+                landings += contact
+            else:
+                spring_on = not spring_on
+        raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP} contact switches within one step of "
+                        f"{h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
+
+    def _piece(self, y, v, contact, spring_on, x0, x1, x2, t0) -> _Piece:
+        """The exact solution from time t0 of the step, in the current contact/spring mode."""
+        p = self.p
+        b, c = p.b1, p.c1
+        # excitation re-centred at t0: xi(t0 + u) = a0 + a1·u + a2·u²
+        a0 = x0 + t0 * (x1 + t0 * x2)
+        a1 = x1 + 2.0 * t0 * x2
+        a2 = x2
+        f0, f1, f2 = -p.F10 - p.m * GRAVITY, 0.0, 0.0
+        if contact:
+            b += p.b2
+            c += p.c2
+        if spring_on:
+            b += p.b3
+            c += p.c3
+            f0 += p.F30 + p.c3 * a0 + p.b3 * a1
+            f1 += p.c3 * a1 + 2.0 * p.b3 * a2
+            f2 += p.c3 * a2
+        return _Piece(p.m, b, c, f0, f1, f2, y, v)
+
+    def _switch_functions(self, piece, tau, contact, spring_on, x0, x1, x2, t_abs):
+        """Switching functions at piece time tau, signed so that > 0 means 'flip this flag'."""
+        y, v = piece.state(tau)
+        g = self._contact_g(y, v)
+        out = [("contact", g if contact else -g)]
+        if self.p.compression_only:
+            xi = x0 + t_abs * (x1 + t_abs * x2)
+            xi_dot = x1 + 2.0 * t_abs * x2
+            gs = self._spring_g(y, v, xi, xi_dot)
+            out.append(("spring", gs if spring_on else -gs))
+        return out
+
+    def _first_switch(self, piece, contact, spring_on, x0, x1, x2, t0, h):
+        """(time in the step, which flag) of the first switch in (t0, h], or None."""
+        n_sub = max(1, math.ceil((h - t0) / (self.shortest_period / _SAMPLES_PER_PERIOD)))
+
+        def funcs(t):
+            return self._switch_functions(piece, t - t0, contact, spring_on, x0, x1, x2, t)
+
+        t_prev = t0
+        for k in range(1, n_sub + 1):
+            t = t0 + (h - t0) * k / n_sub
+            hits = [name for name, val in funcs(t) if val > 0.0]
+            if hits:
+                best = None
+                for name in hits:
+                    t_hit = self._bisect(lambda tt, nm=name: dict(funcs(tt))[nm], t_prev, t)
+                    if best is None or t_hit < best[0]:
+                        best = (t_hit, name)
+                return best
+            t_prev = t
+        return None
+
+    @staticmethod
+    def _bisect(f, lo, hi):
+        """Smallest bracket end where f > 0, with f(lo) <= 0 < f(hi); returns the 'hi' end so the
+        new mode starts strictly inside its own set."""
+        while hi - lo > _TIME_RESOLUTION * max(1.0, abs(hi)):
+            mid = 0.5 * (lo + hi)
+            if mid <= lo or mid >= hi:
+                break
+            if f(mid) > 0.0:
+                hi = mid
+            else:
+                lo = mid
+        return hi

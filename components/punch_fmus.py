@@ -1,0 +1,100 @@
+"""FMUs PunchLinkage and PunchContact: the punch drive of the ultrasonic sewing machine."""
+from __future__ import annotations
+
+from .fmi_base import Port, SewSlave, fields_of
+from .punch_contact import PunchContact, PunchContactParams, PunchState
+from .punch_linkage import PunchLinkage, PunchLinkageParams
+
+
+class PunchLinkageSlave(SewSlave):
+    """Six-bar punch drive (or the required displacement function): shaft motion to punch lift."""
+
+    model_name = "PunchLinkage"
+    params_class = PunchLinkageParams
+    inputs = (
+        Port("phi", "rad", "shaft angle"),
+        Port("omega", "rad/s", "shaft speed"),
+        Port("epsilon", "rad/s2", "shaft angular acceleration"),
+    )
+    outputs = (
+        Port("xi", "m", "kinematic excitation of the punch: xi0 - psi", feedthrough=True),
+        Port("xi_dot", "m/s", "d(xi)/dt", feedthrough=True),
+        Port("xi_ddot", "m/s2", "d2(xi)/dt2", feedthrough=True),
+        Port("psi", "m", "displacement of the slider below its highest point", feedthrough=True),
+    )
+
+    def build_model(self, params):
+        return PunchLinkage(params)
+
+    def extrapolated_inputs(self, dt):
+        u = self._inputs
+        return {"phi": u["phi"] + dt * (u["omega"] + 0.5 * dt * u["epsilon"]),
+                "omega": u["omega"] + dt * u["epsilon"], "epsilon": u["epsilon"]}
+
+    def current_outputs(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        e = self.model().excitation(u["phi"], u["omega"], u["epsilon"])
+        return {"xi": float(e.xi), "xi_dot": float(e.xi_dot), "xi_ddot": float(e.xi_ddot),
+                "psi": float(e.psi)}
+
+    def save_internal(self):
+        return {}
+
+
+class PunchContactSlave(SewSlave):
+    """Punch body with unilateral fabric contact, driven by the linkage through spring 11."""
+
+    model_name = "PunchContact"
+    params_class = PunchContactParams
+    inputs = (
+        Port("xi", "m", "kinematic excitation (slider side of spring 11)"),
+        Port("xi_dot", "m/s", "d(xi)/dt"),
+        Port("xi_ddot", "m/s2", "d2(xi)/dt2"),
+    )
+    outputs = (
+        Port("y", "m", "punch height above the fabric (< 0: pressing into it)"),
+        Port("y_dot", "m/s", "punch velocity"),
+        Port("y_ddot", "m/s2", "punch acceleration", feedthrough=True),
+        Port("F1", "N", "force of the closing spring 6"),
+        Port("F2", "N", "force of the fabric on the punch (>= 0)"),
+        Port("F3", "N", "force of spring 11", feedthrough=True),
+        Port("Delta", "m", "deformation of spring 11: xi - y", feedthrough=True),
+        Port("contact", "1", "punch presses on the fabric (F2 > 0)", kind="Boolean"),
+    )
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._state: PunchState | None = None
+
+    def build_model(self, params):
+        return PunchContact(params)
+
+    def extrapolated_inputs(self, dt):
+        u = self._inputs
+        return {"xi": u["xi"] + dt * (u["xi_dot"] + 0.5 * dt * u["xi_ddot"]),
+                "xi_dot": u["xi_dot"] + dt * u["xi_ddot"], "xi_ddot": u["xi_ddot"]}
+
+    def _state_now(self) -> PunchState:
+        # before initialization ends, the punch rests on its excitation (setup position)
+        if self._state is None:
+            return self.model().initial_state(self._inputs["xi"], self._inputs["xi_dot"])
+        return self._state
+
+    def initialize(self, model):
+        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"])
+
+    def advance(self, model, t, h):
+        # Taylor polynomial of the excitation about the start of this step
+        u = self.extrapolated_inputs(self._elapsed)
+        self._state = model.step(self._state_now(), u["xi"], u["xi_dot"], 0.5 * u["xi_ddot"], h)
+
+    def current_outputs(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"])
+        return fields_of(o)
+
+    def save_internal(self):
+        return {} if self._state is None else fields_of(self._state)
+
+    def restore_internal(self, saved):
+        self._state = PunchState(**saved) if saved else None

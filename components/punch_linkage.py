@@ -1,0 +1,160 @@
+"""Punch drive of the ultrasonic sewing machine: the six-bar linkage that lifts the punch.
+
+Crank O1A turns with the main shaft, coupler AB rocks the bell-crank B-O2-C, and rod CD drives the
+slider D along the vertical line x = x_D (MECHANISMS.md §1a). The slider's fall from its highest
+point is the displacement function psi(phi) >= 0; the punch's kinematic excitation is
+xi = xi0 - psi, its height above the fabric when it follows the slider.
+
+The crank turns clockwise as the shaft angle phi grows: alpha = alpha0 - phi, where alpha0 is the
+crank angle of the slider's top (found at construction), so phi = 0 is the setup position.
+
+A second mode replaces the linkage by the paper's "required displacement function": a cycloidal
+descent to psi_m, a dwell, a cycloidal return and rest at the top.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import RIGHT, Angle, AssemblyError, Motion, dyad_rrp, dyad_rrr, link_angle, \
+    point_on_link
+from .parameters import ANY, CHOICE, NONNEGATIVE, ParameterError, parameter, validate
+
+SIX_BAR = 0
+REQUIRED_DISPLACEMENT = 1
+
+# the assembly check samples the whole crank turn this finely (0.1°)
+_ASSEMBLY_SAMPLES = 3600
+
+
+@dataclass(frozen=True)
+class PunchLinkageParams:
+    mode: int = parameter(SIX_BAR, "1", "0: six-bar linkage, 1: required displacement function",
+                          CHOICE, choices=(SIX_BAR, REQUIRED_DISPLACEMENT))
+    L_O1A: float = parameter(6.0e-3, "m", "crank O1A")
+    L_AB: float = parameter(39.0e-3, "m", "coupler AB")
+    L_O2B: float = parameter(10.0e-3, "m", "rocker arm O2B")
+    L_O2C: float = parameter(7.1e-3, "m", "bell-crank arm O2C, rigid with the rocker")
+    angle_BO2C: float = parameter(math.radians(110.0), "rad",
+                                  "angle from arm O2B clockwise to arm O2C")
+    L_CD: float = parameter(65.0e-3, "m", "connecting rod CD to the slider")
+    x_O2: float = parameter(0.0, "m", "rocker pivot O2, x", ANY)
+    y_O2: float = parameter(40.0e-3, "m", "rocker pivot O2, y (crank pivot O1 at the origin)", ANY)
+    x_D: float = parameter(0.0, "m", "the slider D moves on the vertical line x = x_D", ANY)
+    xi0: float = parameter(4.5e-3, "m", "maximum lift of the punch above the fabric", NONNEGATIVE)
+    psi_m: float = parameter(5.0e-3, "m", "required displacement: depth of the descent")
+    phi_descent: float = parameter(math.radians(150.0), "rad", "required displacement: descent angle")
+    phi_dwell: float = parameter(math.radians(60.0), "rad", "required displacement: dwell angle at psi_m",
+                                 NONNEGATIVE)
+    phi_return: float = parameter(math.radians(150.0), "rad", "required displacement: return angle")
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """psi and xi with their time derivatives (scalars or arrays of one shape)."""
+    psi: np.ndarray
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    xi_ddot: np.ndarray
+
+
+class PunchLinkage:
+    """Six-bar punch drive, or the required displacement function, as phi -> xi(phi)."""
+
+    def __init__(self, params: PunchLinkageParams = PunchLinkageParams()):
+        validate(params)
+        self.p = params
+        if params.mode == SIX_BAR:
+            self._check_assembly()
+            self.alpha0 = self._crank_angle_of_top()
+            self.y_top = float(self.slider(np.array(self.alpha0), 0.0, 0.0).pos[..., 1])
+        else:
+            if params.phi_descent + params.phi_dwell + params.phi_return > 2 * math.pi + 1e-12:
+                raise ParameterError("phi_return", "phi_descent + phi_dwell + phi_return must not "
+                                                   "exceed one revolution (2π rad)")
+            self.alpha0 = 0.0
+            self.y_top = 0.0
+
+    # --- six-bar -----------------------------------------------------------------------------
+    def slider(self, alpha: np.ndarray, alpha_rate, alpha_accel) -> Motion:
+        """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
+        p = self.p
+        alpha = np.asarray(alpha, dtype=float)
+        shape = alpha.shape
+        o1 = Motion.fixed(0.0, 0.0, shape)
+        o2 = Motion.fixed(p.x_O2, p.y_O2, shape)
+        crank = Angle(alpha, np.broadcast_to(alpha_rate, shape), np.broadcast_to(alpha_accel, shape))
+        a = point_on_link(o1, p.L_O1A, crank)
+        # B on the +x side of A -> O2, i.e. on the right of that (upward) line
+        b = dyad_rrr(a, p.L_AB, o2, p.L_O2B, RIGHT, name="coupler AB / rocker O2B")
+        rocker = link_angle(o2, b)
+        c = point_on_link(o2, p.L_O2C, rocker, offset=-p.angle_BO2C)
+        # D below C on the vertical line x = x_D
+        return dyad_rrp(c, p.L_CD, (p.x_D, 0.0), math.pi / 2, -1, name="rod CD / slider line")
+
+    def _check_assembly(self) -> None:
+        alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
+        try:
+            self.slider(alpha, 0.0, 0.0)
+        except AssemblyError as err:
+            deg = math.degrees(alpha[err.index])
+            raise AssemblyError(f"punch six-bar cannot be assembled at crank angle alpha = "
+                                f"{deg:.1f}° ({err}); parameters: L_O1A={self.p.L_O1A}, "
+                                f"L_AB={self.p.L_AB}, L_O2B={self.p.L_O2B}, L_O2C={self.p.L_O2C}, "
+                                f"L_CD={self.p.L_CD}, O2=({self.p.x_O2}, {self.p.y_O2}), "
+                                f"x_D={self.p.x_D}") from None
+
+    def _crank_angle_of_top(self) -> float:
+        """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -."""
+        alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
+        y = self.slider(alpha, 0.0, 0.0).pos[..., 1]
+        k = int(np.argmax(y))
+        lo, hi = alpha[k] - 2 * math.pi / _ASSEMBLY_SAMPLES, alpha[k] + 2 * math.pi / _ASSEMBLY_SAMPLES
+
+        def slope(a: float) -> float:      # dY_D/dalpha, analytic (crank rate 1)
+            return float(self.slider(np.array(a), 1.0, 0.0).vel[..., 1])
+
+        for _ in range(60):                # bisection on the slope: robust and exact enough
+            mid = 0.5 * (lo + hi)
+            if slope(mid) > 0:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi) % (2 * math.pi)
+
+    # --- required displacement -----------------------------------------------------------------
+    def _required(self, phi: np.ndarray):
+        """psi and its first two derivatives with respect to phi."""
+        p = self.p
+        th = np.mod(phi, 2 * math.pi)
+        psi = np.zeros_like(th)
+        d1 = np.zeros_like(th)
+        d2 = np.zeros_like(th)
+        ends = np.cumsum([p.phi_descent, p.phi_dwell, p.phi_return])
+        down = th < ends[0]
+        dwell = (th >= ends[0]) & (th < ends[1])
+        up = (th >= ends[1]) & (th < ends[2])
+        for mask, start, width, sign in ((down, 0.0, p.phi_descent, +1),
+                                         (up, ends[1], p.phi_return, -1)):
+            u = (th[mask] - start) / width
+            s = u - np.sin(2 * math.pi * u) / (2 * math.pi)       # cycloidal law
+            psi[mask] = p.psi_m * (s if sign > 0 else 1.0 - s)
+            d1[mask] = sign * p.psi_m * (1.0 - np.cos(2 * math.pi * u)) / width
+            d2[mask] = sign * p.psi_m * 2 * math.pi * np.sin(2 * math.pi * u) / width ** 2
+        psi[dwell] = p.psi_m
+        return psi, d1, d2
+
+    # --- the excitation of the punch -------------------------------------------------------------
+    def excitation(self, phi, omega, epsilon) -> Excitation:
+        """psi, xi, dxi/dt, d2xi/dt2 for shaft angle phi (rad), speed omega, acceleration epsilon."""
+        phi = np.asarray(phi, dtype=float)
+        if self.p.mode == SIX_BAR:
+            d = self.slider(self.alpha0 - phi, -np.asarray(omega, float), -np.asarray(epsilon, float))
+            y, vy, ay = d.pos[..., 1], d.vel[..., 1], d.acc[..., 1]
+            psi = self.y_top - y
+            return Excitation(psi, self.p.xi0 - psi, vy, ay)
+        psi, d1, d2 = self._required(phi)
+        # xi = xi0 - psi(phi): chain rule with phi' = omega, phi'' = epsilon
+        return Excitation(psi, self.p.xi0 - psi, -d1 * omega, -(d2 * omega ** 2 + d1 * epsilon))

@@ -1,0 +1,24 @@
+"""FMU MainShaft: the shaft angle, speed and acceleration that drive every mechanism."""
+from __future__ import annotations
+
+from .fmi_base import Port, SewSlave
+from .shaft import MainShaft, ShaftParams
+
+
+class MainShaftSlave(SewSlave):
+    """Main shaft of the sewing machine: constant speed after an optional smooth start."""
+
+    model_name = "MainShaft"
+    params_class = ShaftParams
+    outputs = (
+        Port("phi", "rad", "shaft angle, cumulative (one stitch = 2π)"),
+        Port("omega", "rad/s", "shaft speed"),
+        Port("epsilon", "rad/s2", "shaft angular acceleration"),
+    )
+
+    def build_model(self, params):
+        return MainShaft(params)
+
+    def current_outputs(self):
+        phi, omega, epsilon = self.model().state(self._time)
+        return {"phi": phi, "omega": omega, "epsilon": epsilon}
