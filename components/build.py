@@ -76,8 +76,15 @@ def build_fmu(name: str, dest: Path | None = None) -> Path:
         tmp = Path(tmp)
         pkg_dir = tmp / package
         pkg_dir.mkdir()
-        for path in PACKAGE_DIR.glob("*.py"):
-            shutil.copy2(path, pkg_dir / path.name)
+        modules = sorted(p.stem for p in PACKAGE_DIR.glob("*.py")
+                         if p.stem not in ("__init__", "build"))
+        for mod in modules:
+            shutil.copy2(PACKAGE_DIR / f"{mod}.py", pkg_dir / f"{mod}.py")
+        # Import every module with the package: a host that loads this FMU again from another
+        # unzip directory (or deletes the first one) then finds the whole package in sys.modules.
+        (pkg_dir / "__init__.py").write_text(
+            f'"""sewfmu model code {tag}, as carried by this FMU."""\n'
+            + "".join(f"from . import {mod}  # noqa: F401\n" for mod in modules))
         script = tmp / f"{script_module}.py"
         # pythonfmu's binary finds the class with the regex `class X(Fmi2Slave):`, hence the alias
         script.write_text(

@@ -1,7 +1,8 @@
 """Planar kinematics shared by every linkage: points in motion, cranks, dyads.
 
-A point in motion is a `Motion`: position, velocity and acceleration, each an array whose last
-axis is (x, y). Leading axes are free, so one call evaluates a whole crank revolution at once.
+A point in motion is a `Motion`: position, velocity and acceleration as separate x and y
+components. Each component is a float or a numpy array of any shape: one call evaluates a whole
+crank revolution at once, and a single crank angle runs on plain floats (fast, for the FMUs).
 Velocities and accelerations come from the differentiated loop-closure equations (never from
 finite differences): for a dyad with |X - P| = r_P and |X - Q| = r_Q,
 
@@ -13,7 +14,9 @@ is stretched or folded flat (the limit of assembly).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -25,57 +28,62 @@ class AssemblyError(ValueError):
     """A linkage cannot be assembled: the two links of a dyad cannot reach each other."""
 
 
+def _sqrt(x):
+    return math.sqrt(x) if isinstance(x, float) else np.sqrt(x)
+
+
+def _cos(x):
+    return math.cos(x) if isinstance(x, float) else np.cos(x)
+
+
+def _sin(x):
+    return math.sin(x) if isinstance(x, float) else np.sin(x)
+
+
+def _atan2(y, x):
+    return math.atan2(y, x) if isinstance(y, float) else np.arctan2(y, x)
+
+
 @dataclass(frozen=True)
 class Motion:
-    """Position, velocity and acceleration of a point; arrays of shape (..., 2)."""
-    pos: np.ndarray
-    vel: np.ndarray
-    acc: np.ndarray
-
-    @staticmethod
-    def fixed(x: float, y: float, shape=()) -> "Motion":
-        pos = np.broadcast_to(np.array([x, y], dtype=float), tuple(shape) + (2,))
-        zero = np.zeros_like(pos)
-        return Motion(pos, zero, zero)
+    """Position (x, y), velocity (vx, vy) and acceleration (ax, ay) of a point."""
+    x: Any
+    y: Any
+    vx: Any = 0.0
+    vy: Any = 0.0
+    ax: Any = 0.0
+    ay: Any = 0.0
 
 
 @dataclass(frozen=True)
 class Angle:
-    """An angle with its first and second time derivatives (arrays of one shape)."""
-    value: np.ndarray
-    rate: np.ndarray
-    accel: np.ndarray
+    """An angle with its first and second time derivatives."""
+    value: Any
+    rate: Any = 0.0
+    accel: Any = 0.0
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+def _scalar_or_array(x):
+    """Plain float for a scalar (fast math path), float array otherwise."""
+    arr = np.asarray(x, dtype=float)
+    return float(arr) if arr.ndim == 0 else arr
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", a, b)
+def angle(value, rate=0.0, accel=0.0) -> Angle:
+    return Angle(_scalar_or_array(value), _scalar_or_array(rate), _scalar_or_array(accel))
 
 
-def _unit(angle: np.ndarray) -> np.ndarray:
-    return np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+def point_on_link(pivot: Motion, length: float, ang: Angle, offset: float = 0.0) -> Motion:
+    """A point at `length` from `pivot` on a link whose direction is `ang + offset` (rad).
 
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    """v turned by +90°."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
-
-
-def point_on_link(pivot: Motion, length: float, angle: Angle, offset: float = 0.0) -> Motion:
-    """A point at `length` from `pivot` on a link whose direction is `angle + offset` (rad).
-
-    Used for cranks (the angle is the driven crank angle) and for arms rigid with a rocker.
+    Used for cranks (the driven crank angle) and for arms rigid with a rocker.
     """
-    e = _unit(np.asarray(angle.value) + offset)
-    n = _perp(e)
-    w = np.asarray(angle.rate)[..., None]
-    dw = np.asarray(angle.accel)[..., None]
-    return Motion(pivot.pos + length * e,
-                  pivot.vel + length * w * n,
-                  pivot.acc + length * (dw * n - w * w * e))
+    c, s = _cos(ang.value + offset), _sin(ang.value + offset)
+    w, dw = ang.rate, ang.accel
+    w2 = w * w
+    return Motion(pivot.x + length * c, pivot.y + length * s,
+                  pivot.vx - length * w * s, pivot.vy + length * w * c,
+                  pivot.ax + length * (-dw * s - w2 * c), pivot.ay + length * (dw * c - w2 * s))
 
 
 def link_angle(start: Motion, end: Motion) -> Angle:
@@ -83,53 +91,54 @@ def link_angle(start: Motion, end: Motion) -> Angle:
 
     Valid for a link of constant length, where d/dt(r × dr) = r × ddr.
     """
-    r = end.pos - start.pos
-    v = end.vel - start.vel
-    a = end.acc - start.acc
-    r2 = _dot(r, r)
-    return Angle(np.arctan2(r[..., 1], r[..., 0]), _cross(r, v) / r2, _cross(r, a) / r2)
+    rx, ry = end.x - start.x, end.y - start.y
+    vx, vy = end.vx - start.vx, end.vy - start.vy
+    ax, ay = end.ax - start.ax, end.ay - start.ay
+    r2 = rx * rx + ry * ry
+    return Angle(_atan2(ry, rx), (rx * vy - ry * vx) / r2, (rx * ay - ry * ax) / r2)
 
 
-def _first_failure(bad: np.ndarray) -> int:
-    return int(np.flatnonzero(np.ravel(bad))[0])
+def _raise_first(bad, message: str):
+    bad = np.asarray(bad)
+    if bad.any():
+        err = AssemblyError(message)
+        err.index = int(np.flatnonzero(np.ravel(bad))[0]) if bad.ndim else 0
+        raise err
 
 
 def dyad_rrr(p: Motion, r_p: float, q: Motion, r_q: float, side: int, name: str = "dyad") -> Motion:
     """Joint X of two links (lengths r_p from P, r_q from Q): circle–circle intersection.
 
-    `side` is LEFT or RIGHT of the directed line P -> Q. Raises AssemblyError naming the first
-    sample (flat index `AssemblyError.index`) where the circles do not intersect.
+    `side` is LEFT or RIGHT of the directed line P -> Q. Raises AssemblyError, whose `index` is
+    the flat index of the first sample where the circles do not intersect.
     """
-    d_vec = q.pos - p.pos
-    d2 = _dot(d_vec, d_vec)
-    d = np.sqrt(d2)
+    dx, dy = q.x - p.x, q.y - p.y
+    d2 = dx * dx + dy * dy
+    _raise_first(np.logical_not(d2 > 0.0), f"{name}: the two pivots coincide")
+    d = _sqrt(d2)
     # distance from P, along P->Q, to the chord through the two intersection points
     along = (d2 + r_p * r_p - r_q * r_q) / (2.0 * d)
     h2 = r_p * r_p - along * along
-    bad = ~(h2 >= 0.0) | ~(d > 0.0)
-    if np.any(bad):
-        err = AssemblyError(f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
-        err.index = _first_failure(bad)
-        raise err
-    e = d_vec / d[..., None]
-    pos = p.pos + along[..., None] * e + (side * np.sqrt(h2))[..., None] * _perp(e)
+    _raise_first(np.logical_not(h2 >= 0.0),
+                 f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
+    ex, ey = dx / d, dy / d
+    hh = side * _sqrt(h2)
+    x, y = p.x + along * ex - hh * ey, p.y + along * ey + hh * ex
 
-    # velocity and acceleration loops: rows of J are (X - P) and (X - Q)
-    a_row = pos - p.pos
-    b_row = pos - q.pos
-    det = _cross(a_row, b_row)
+    # velocity and acceleration loops; rows of the matrix are (X - P) and (X - Q)
+    ax_, ay_ = x - p.x, y - p.y
+    bx_, by_ = x - q.x, y - q.y
+    det = ax_ * by_ - ay_ * bx_
 
-    def solve(rhs_a: np.ndarray, rhs_b: np.ndarray) -> np.ndarray:
-        # Cramer's rule for [a_row; b_row] · X = [rhs_a; rhs_b]
-        x = (rhs_a * b_row[..., 1] - rhs_b * a_row[..., 1]) / det
-        y = (a_row[..., 0] * rhs_b - b_row[..., 0] * rhs_a) / det
-        return np.stack([x, y], axis=-1)
+    def solve(ra, rb):
+        return (ra * by_ - rb * ay_) / det, (ax_ * rb - bx_ * ra) / det
 
-    vel = solve(_dot(a_row, p.vel), _dot(b_row, q.vel))
-    dvp = vel - p.vel
-    dvq = vel - q.vel
-    acc = solve(_dot(a_row, p.acc) - _dot(dvp, dvp), _dot(b_row, q.acc) - _dot(dvq, dvq))
-    return Motion(pos, vel, acc)
+    vx, vy = solve(ax_ * p.vx + ay_ * p.vy, bx_ * q.vx + by_ * q.vy)
+    dvpx, dvpy = vx - p.vx, vy - p.vy
+    dvqx, dvqy = vx - q.vx, vy - q.vy
+    accx, accy = solve(ax_ * p.ax + ay_ * p.ay - (dvpx * dvpx + dvpy * dvpy),
+                       bx_ * q.ax + by_ * q.ay - (dvqx * dvqx + dvqy * dvqy))
+    return Motion(x, y, vx, vy, accx, accy)
 
 
 def dyad_rrp(c: Motion, r: float, line_point: tuple[float, float], line_angle: float, side: int,
@@ -139,22 +148,17 @@ def dyad_rrp(c: Motion, r: float, line_point: tuple[float, float], line_angle: f
     The line passes through `line_point` with direction `line_angle` (rad). `side` = +1 takes the
     intersection further along the line direction, -1 the one behind.
     """
-    u = np.array([np.cos(line_angle), np.sin(line_angle)])
-    rel = c.pos - np.asarray(line_point, dtype=float)
-    along = _dot(rel, u)
-    off = _cross(u, rel)          # signed distance of C from the line
+    ux, uy = math.cos(line_angle), math.sin(line_angle)
+    relx, rely = c.x - line_point[0], c.y - line_point[1]
+    along = relx * ux + rely * uy
+    off = ux * rely - uy * relx          # signed distance of C from the line
     h2 = r * r - off * off
-    bad = ~(h2 >= 0.0)
-    if np.any(bad):
-        err = AssemblyError(f"{name}: rod of {r:.6g} m cannot reach the slider line")
-        err.index = _first_failure(bad)
-        raise err
-    s = along + side * np.sqrt(h2)
-    pos = np.asarray(line_point, dtype=float) + s[..., None] * u
-    rod = pos - c.pos
-    denom = _dot(rod, u)
-    s_dot = _dot(rod, c.vel) / denom
-    vel = s_dot[..., None] * u
-    dv = vel - c.vel
-    s_ddot = (_dot(rod, c.acc) - _dot(dv, dv)) / denom
-    return Motion(pos, vel, s_ddot[..., None] * u)
+    _raise_first(np.logical_not(h2 >= 0.0), f"{name}: rod of {r:.6g} m cannot reach the slider line")
+    s = along + side * _sqrt(h2)
+    x, y = line_point[0] + s * ux, line_point[1] + s * uy
+    rodx, rody = x - c.x, y - c.y
+    denom = rodx * ux + rody * uy
+    s_dot = (rodx * c.vx + rody * c.vy) / denom
+    dvx, dvy = s_dot * ux - c.vx, s_dot * uy - c.vy
+    s_ddot = (rodx * c.ax + rody * c.ay - (dvx * dvx + dvy * dvy)) / denom
+    return Motion(x, y, s_dot * ux, s_dot * uy, s_ddot * ux, s_ddot * uy)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import RIGHT, Angle, AssemblyError, Motion, dyad_rrp, dyad_rrr, link_angle, \
+from .kinematics import RIGHT, AssemblyError, Motion, angle, dyad_rrp, dyad_rrr, link_angle, \
     point_on_link
 from .parameters import ANY, CHOICE, NONNEGATIVE, ParameterError, parameter, validate
 
@@ -69,7 +69,7 @@ class PunchLinkage:
         if params.mode == SIX_BAR:
             self._check_assembly()
             self.alpha0 = self._crank_angle_of_top()
-            self.y_top = float(self.slider(np.array(self.alpha0), 0.0, 0.0).pos[..., 1])
+            self.y_top = self.slider(self.alpha0, 0.0, 0.0).y
         else:
             if params.phi_descent + params.phi_dwell + params.phi_return > 2 * math.pi + 1e-12:
                 raise ParameterError("phi_return", "phi_descent + phi_dwell + phi_return must not "
@@ -78,15 +78,11 @@ class PunchLinkage:
             self.y_top = 0.0
 
     # --- six-bar -----------------------------------------------------------------------------
-    def slider(self, alpha: np.ndarray, alpha_rate, alpha_accel) -> Motion:
+    def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
         """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
         p = self.p
-        alpha = np.asarray(alpha, dtype=float)
-        shape = alpha.shape
-        o1 = Motion.fixed(0.0, 0.0, shape)
-        o2 = Motion.fixed(p.x_O2, p.y_O2, shape)
-        crank = Angle(alpha, np.broadcast_to(alpha_rate, shape), np.broadcast_to(alpha_accel, shape))
-        a = point_on_link(o1, p.L_O1A, crank)
+        o2 = Motion(p.x_O2, p.y_O2)
+        a = point_on_link(Motion(0.0, 0.0), p.L_O1A, angle(alpha, alpha_rate, alpha_accel))
         # B on the +x side of A -> O2, i.e. on the right of that (upward) line
         b = dyad_rrr(a, p.L_AB, o2, p.L_O2B, RIGHT, name="coupler AB / rocker O2B")
         rocker = link_angle(o2, b)
@@ -109,12 +105,12 @@ class PunchLinkage:
     def _crank_angle_of_top(self) -> float:
         """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -."""
         alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
-        y = self.slider(alpha, 0.0, 0.0).pos[..., 1]
+        y = self.slider(alpha, 0.0, 0.0).y
         k = int(np.argmax(y))
         lo, hi = alpha[k] - 2 * math.pi / _ASSEMBLY_SAMPLES, alpha[k] + 2 * math.pi / _ASSEMBLY_SAMPLES
 
         def slope(a: float) -> float:      # dY_D/dalpha, analytic (crank rate 1)
-            return float(self.slider(np.array(a), 1.0, 0.0).vel[..., 1])
+            return self.slider(float(a), 1.0, 0.0).vy
 
         for _ in range(60):                # bisection on the slope: robust and exact enough
             mid = 0.5 * (lo + hi)
@@ -128,7 +124,7 @@ class PunchLinkage:
     def _required(self, phi: np.ndarray):
         """psi and its first two derivatives with respect to phi."""
         p = self.p
-        th = np.mod(phi, 2 * math.pi)
+        th = np.mod(np.asarray(phi, dtype=float), 2 * math.pi)
         psi = np.zeros_like(th)
         d1 = np.zeros_like(th)
         d2 = np.zeros_like(th)
@@ -149,12 +145,11 @@ class PunchLinkage:
     # --- the excitation of the punch -------------------------------------------------------------
     def excitation(self, phi, omega, epsilon) -> Excitation:
         """psi, xi, dxi/dt, d2xi/dt2 for shaft angle phi (rad), speed omega, acceleration epsilon."""
-        phi = np.asarray(phi, dtype=float)
         if self.p.mode == SIX_BAR:
-            d = self.slider(self.alpha0 - phi, -np.asarray(omega, float), -np.asarray(epsilon, float))
-            y, vy, ay = d.pos[..., 1], d.vel[..., 1], d.acc[..., 1]
-            psi = self.y_top - y
-            return Excitation(psi, self.p.xi0 - psi, vy, ay)
+            d = self.slider(self.alpha0 - np.asarray(phi, float), -np.asarray(omega, float),
+                            -np.asarray(epsilon, float))
+            psi = self.y_top - d.y
+            return Excitation(psi, self.p.xi0 - psi, d.vy, d.ay)
         psi, d1, d2 = self._required(phi)
         # xi = xi0 - psi(phi): chain rule with phi' = omega, phi'' = epsilon
         return Excitation(psi, self.p.xi0 - psi, -d1 * omega, -(d2 * omega ** 2 + d1 * epsilon))

@@ -1,0 +1,111 @@
+"""`sewfmu`: the command line, a thin layer over components.build and scenarios.runner."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .format import ScenarioError, catalogue, load, parse_value
+
+
+def _load_with_sets(name: str, sets: list[str]):
+    scenario = load(name)
+    for item in sets or []:
+        target, eq, text = item.partition("=")
+        if not eq:
+            raise ScenarioError(f"--set {item}: expected instance.parameter=value")
+        scenario.set_value(target.strip(), parse_value(text.strip(), f"--set {item}"))
+    return scenario
+
+
+def cmd_build(args) -> None:
+    from components.build import build_all, default_fmu_dir
+
+    for path in build_all(Path(args.dest) if args.dest else default_fmu_dir()):
+        print(path)
+
+
+def cmd_list(args) -> None:
+    from components.catalogue import FMUS
+
+    print("components (FMUs):")
+    for name, (module, slave) in FMUS.items():
+        import importlib
+        doc = getattr(importlib.import_module(f"components.{module}"), slave).__doc__
+        print(f"  {name:14s} {doc.strip().splitlines()[0]}")
+    print("scenarios:")
+    for name, path in sorted(catalogue().items()):
+        print(f"  {name:18s} {load(str(path)).description}")
+
+
+def cmd_run(args) -> None:
+    from .runner import run_scenario
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    out = Path(args.out) if args.out else Path("results") / scenario.name
+    summary = run_scenario(scenario, out, plot=args.plot)
+    print(f"{scenario.name}: results in {out}/")
+    figures = summary.get("runs", {"": summary})
+    for label, fig in figures.items():
+        shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in fig.items()
+                          if k not in ("scenario", "master", "step", "stop_time"))
+        print(f"  {label + ': ' if label else ''}{shown}")
+
+
+def cmd_compare(args) -> None:
+    from .runner import compare
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    rows = compare(scenario)
+    print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
+          f"co-simulation vs monolithic reference")
+    print(f"  {'figure':22s} {'co-simulation':>14s} {'reference':>14s} {'difference':>12s}")
+    for key, a, b, d in rows:
+        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4f}"
+    return str(value)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="sewfmu", description="Sewing-machine mechanisms as "
+                                     "FMI 2.0 co-simulation FMUs, and scenarios that connect them.")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("build", help="build every FMU into fmus/")
+    p.add_argument("--dest", help="output folder (default: fmus/)")
+    p.set_defaults(func=cmd_build)
+    p = sub.add_parser("list", help="components and scenarios, one line each")
+    p.set_defaults(func=cmd_list)
+    for name, func, text in (("run", cmd_run, "run a scenario"),
+                             ("compare", cmd_compare,
+                              "co-simulation against the monolithic reference")):
+        p = sub.add_parser(name, help=text)
+        p.add_argument("scenario", help="catalogue name or path to a .toml file")
+        p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
+                       help="override a parameter (or experiment.step, experiment.master, ...)")
+        p.set_defaults(func=func)
+        if name == "run":
+            p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
+            p.add_argument("--plot", action="store_true", help="write PNG figures")
+    args = parser.parse_args(argv)
+    try:
+        args.func(args)
+    except KeyboardInterrupt:
+        print("sewfmu: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:        # one clear line for the user; --debug for the traceback
+        if args.debug:
+            raise
+        from .master import CosimError
+        kind = "" if isinstance(err, (ScenarioError, CosimError)) else f"{type(err).__name__}: "
+        print(f"sewfmu: error: {kind}{err}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

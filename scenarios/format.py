@@ -1,0 +1,253 @@
+"""The scenario file: a small TOML that names FMU instances, connections and the experiment.
+
+    description = "..."
+    analysis = "punch"                      # key figures and plots (scenarios/analyses.py)
+    connections = ["shaft.phi -> linkage.phi", ...]
+    record = ["punch.y", ...]               # optional; default: every output
+
+    [experiment]
+    revolutions = 10                        # or stop_time = 0.5 (s)
+    shaft = "shaft"                         # the MainShaft instance whose turns are counted
+    step = 1e-4                             # communication step (s)
+    master = "jacobi"                       # or "gauss-seidel"
+
+    [instances.shaft]
+    fmu = "MainShaft"
+    parameters = { omega0 = 100.0 }
+
+    [compare]                               # optional: overlaid runs
+    parameter = "shaft.omega0"
+    values = [100.0, 200.0, 300.0]
+
+Every mistake is a ScenarioError that names the file and the key.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+MASTERS = ("jacobi", "gauss-seidel")
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot run, with the file and key it comes from."""
+
+
+@dataclass(frozen=True)
+class Connection:
+    src: str          # instance
+    src_var: str
+    dst: str
+    dst_var: str
+
+    def __str__(self) -> str:
+        return f"{self.src}.{self.src_var} -> {self.dst}.{self.dst_var}"
+
+
+@dataclass
+class Instance:
+    name: str
+    fmu: str
+    parameters: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Scenario:
+    name: str
+    source: str                     # where it was read from, for messages
+    description: str
+    analysis: str | None
+    instances: dict[str, Instance]
+    connections: list[Connection]
+    record: list[str] | None
+    step: float
+    master: str
+    stop_time: float | None
+    revolutions: float | None
+    shaft: str | None
+    compare: dict[str, Any] | None
+
+    def copy(self) -> "Scenario":
+        return copy.deepcopy(self)
+
+    def set_value(self, target: str, value: Any, origin: str = "--set") -> None:
+        """Apply `instance.parameter = value` (or `experiment.key = value`)."""
+        inst, dot, key = target.partition(".")
+        if not dot or not key:
+            raise ScenarioError(f"{origin} {target}: expected instance.parameter")
+        if inst == "experiment":
+            self._set_experiment(key, value, origin)
+            return
+        if inst not in self.instances:
+            raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source} "
+                                f"(instances: {', '.join(self.instances)})")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ScenarioError(f"{origin} {target}: value must be a number, got {value!r}")
+        self.instances[inst].parameters[key] = value
+
+    def _set_experiment(self, key: str, value: Any, origin: str) -> None:
+        if key == "master":
+            if value not in MASTERS:
+                raise ScenarioError(f"{origin} experiment.master: must be one of {MASTERS}, "
+                                    f"got {value!r}")
+            self.master = value
+            return
+        if key not in ("step", "stop_time", "revolutions"):
+            raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
+                                f"(step, stop_time, revolutions, master)")
+        number = _positive(value, f"{origin} experiment.{key}")
+        setattr(self, key, number)
+        if key == "stop_time":
+            self.revolutions = None
+        elif key == "revolutions":
+            self.stop_time = None
+
+
+def _positive(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where}: must be a number, got {value!r}")
+    if not math.isfinite(value) or value <= 0:
+        raise ScenarioError(f"{where}: must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def parse_value(text: str, where: str) -> Any:
+    """A --set value: a TOML scalar (number or string)."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        if text.lower() in ("nan", "+nan", "-nan", "inf", "+inf", "-inf"):
+            return float(text)
+        return text           # a bare word: let the caller say what it expected
+
+
+def catalogue() -> dict[str, Path]:
+    """The scenarios that ship with sewfmu: name -> path."""
+    folder = resources.files(__package__) / "catalogue"
+    return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
+
+
+def resolve(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.suffix == ".toml":
+        if not path.is_file():
+            raise ScenarioError(f"scenario file {path} does not exist")
+        return path
+    known = catalogue()
+    if name_or_path not in known:
+        raise ScenarioError(f"unknown scenario {name_or_path!r} (catalogue: "
+                            f"{', '.join(sorted(known))}; or give a path to a .toml file)")
+    return known[name_or_path]
+
+
+def load(name_or_path: str) -> Scenario:
+    path = resolve(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError(f"{path}: not valid TOML: {err}") from None
+    except OSError as err:
+        raise ScenarioError(f"{path}: cannot read: {err}") from None
+    return from_dict(data, path.stem, str(path))
+
+
+def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
+    value = data.get(key)
+    if value is None:
+        if required:
+            raise ScenarioError(f"{where}: missing [{key}]")
+        return {}
+    if not isinstance(value, dict):
+        raise ScenarioError(f"{where}: {key} must be a table")
+    return value
+
+
+def from_dict(data: dict, name: str, source: str) -> Scenario:
+    known_top = {"description", "analysis", "connections", "record", "experiment", "instances",
+                 "compare"}
+    for key in data:
+        if key not in known_top:
+            raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
+    exp = _table(data, "experiment", source)
+    known_exp = {"revolutions", "stop_time", "shaft", "step", "master"}
+    for key in exp:
+        if key not in known_exp:
+            raise ScenarioError(f"{source}: unknown key experiment.{key} "
+                                f"(known: {', '.join(sorted(known_exp))})")
+    if ("revolutions" in exp) == ("stop_time" in exp):
+        raise ScenarioError(f"{source}: [experiment] needs exactly one of revolutions, stop_time")
+    master = exp.get("master", "jacobi")
+    if master not in MASTERS:
+        raise ScenarioError(f"{source}: experiment.master must be one of {MASTERS}, got {master!r}")
+    if "step" not in exp:
+        raise ScenarioError(f"{source}: missing experiment.step")
+
+    instances = {}
+    for inst_name, spec in _table(data, "instances", source).items():
+        where = f"{source}: instances.{inst_name}"
+        if not isinstance(spec, dict) or not isinstance(spec.get("fmu"), str):
+            raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
+        for key in spec:
+            if key not in ("fmu", "parameters"):
+                raise ScenarioError(f"{where}: unknown key {key!r} (fmu, parameters)")
+        params = spec.get("parameters", {})
+        if not isinstance(params, dict):
+            raise ScenarioError(f"{where}.parameters must be a table")
+        inst = Instance(inst_name, spec["fmu"], {})
+        instances[inst_name] = inst
+    scenario = Scenario(
+        name=name, source=source, description=str(data.get("description", "")),
+        analysis=data.get("analysis"), instances=instances, connections=[],
+        record=data.get("record"), step=_positive(exp["step"], f"{source}: experiment.step"),
+        master=master,
+        stop_time=(_positive(exp["stop_time"], f"{source}: experiment.stop_time")
+                   if "stop_time" in exp else None),
+        revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
+                     if "revolutions" in exp else None),
+        shaft=exp.get("shaft"), compare=data.get("compare"))
+    for inst_name, spec in data["instances"].items():
+        for key, value in spec.get("parameters", {}).items():
+            scenario.set_value(f"{inst_name}.{key}", value,
+                               origin=f"{source}: instances.{inst_name}.parameters")
+    if scenario.revolutions is not None:
+        if scenario.shaft not in instances:
+            raise ScenarioError(f"{source}: experiment.shaft must name the MainShaft instance "
+                                f"whose revolutions are counted, got {scenario.shaft!r}")
+    connections = data.get("connections", [])
+    if not isinstance(connections, list):
+        raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
+    for text in connections:
+        scenario.connections.append(_parse_connection(text, instances, source))
+    if scenario.record is not None and not isinstance(scenario.record, list):
+        raise ScenarioError(f"{source}: record must be a list of \"instance.variable\" strings")
+    if scenario.compare is not None:
+        cmp = scenario.compare
+        if not isinstance(cmp, dict) or not isinstance(cmp.get("parameter"), str) \
+                or not isinstance(cmp.get("values"), list) or not cmp["values"]:
+            raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
+                                f"a non-empty list values = [...]")
+        probe = scenario.copy()
+        for value in cmp["values"]:
+            probe.set_value(cmp["parameter"], value, origin=f"{source}: compare")
+    return scenario
+
+
+def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
+    where = f"{source}: connection {text!r}"
+    if not isinstance(text, str) or "->" not in text:
+        raise ScenarioError(f"{where}: expected \"instance.output -> instance.input\"")
+    left, right = (part.strip() for part in text.split("->", 1))
+    ends = []
+    for end in (left, right):
+        inst, dot, var = end.partition(".")
+        if not dot or not var:
+            raise ScenarioError(f"{where}: {end!r} is not instance.variable")
+        if inst not in instances:
+            raise ScenarioError(f"{where}: unknown instance {inst!r}")
+        ends.append((inst, var))
+    return Connection(ends[0][0], ends[0][1], ends[1][0], ends[1][1])

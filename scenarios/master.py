@@ -1,0 +1,351 @@
+"""The co-simulation master: fmpy FMU2Slave instances stepped at a fixed communication step.
+
+One base class owns the whole run: loading and extracting the FMUs, initialization in dependency
+order, the stepping loop, recording into a preallocated numpy array and freeing every instance
+whatever happens. A variant declares only its `exchange_and_step`:
+
+- Jacobi: every FMU steps from the values at t; then, in dependency order, each FMU's inputs are
+  set from its sources' outputs at t + h (a direct-feedthrough FMU's outputs follow its new inputs
+  before the next FMU reads them).
+- Gauss–Seidel: FMUs step one after another in dependency order, each fed its sources' newest
+  outputs just before its own step, so an FMU fed by one that has already stepped starts its step
+  with values of t + h.
+
+Value references are resolved once; each step makes one batched set and one batched get per FMU
+through preallocated ctypes arrays (no lookups by name, no per-step allocation).
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import shutil
+import tempfile
+import time as clock
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2CallbackAllocateMemoryTYPE, \
+    fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Real, \
+    fmi2ValueReference
+
+from .format import Scenario, ScenarioError
+
+_STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
+
+
+class CosimError(RuntimeError):
+    """An FMU failed during the run; the message names the instance, the time and its log."""
+
+
+@dataclass
+class RunResult:
+    scenario: Scenario
+    time: np.ndarray
+    columns: dict[str, np.ndarray]
+    wall_time: float
+    log: list[str] = field(default_factory=list)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+
+class _LogCollector:
+    """FMU log callback that keeps the messages (for error reports) instead of printing them."""
+
+    def __init__(self):
+        self.lines: list[str] = []
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:
+            from fmpy.logging import addLoggerProxy
+            addLoggerProxy(ctypes.byref(self.callbacks))
+        except Exception:        # without the proxy, messages arrive unformatted: still useful
+            pass
+
+    def _log(self, component, instance_name, status, category, message):
+        name = instance_name.decode("utf-8", "replace") if instance_name else "?"
+        text = message.decode("utf-8", "replace") if message else ""
+        self.lines.append(f"[{_STATUS[status] if 0 <= status < 6 else status}] {name}: {text}")
+
+    def for_instance(self, name: str) -> list[str]:
+        return [line for line in self.lines if f"] {name}: " in line]
+
+
+class _Unit:
+    """One FMU instance in the master, with its value references resolved."""
+
+    def __init__(self, name: str, fmu_path: Path, unzip_dir: str, md, log: _LogCollector):
+        self.name = name
+        self.md = md
+        self.variables = {v.name: v for v in md.modelVariables}
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.log = log
+        self.instantiated = False
+        self.real_out: list[str] = []       # outputs read every step, in order
+        self.bool_out: list[str] = []
+        self.inputs: list[tuple[str, "_Unit", str]] = []   # (input, source unit, source output)
+
+    def variable(self, var: str, causality: tuple[str, ...], what: str):
+        v = self.variables.get(var)
+        if v is None or v.causality not in causality:
+            names = sorted(n for n, x in self.variables.items() if x.causality in causality)
+            raise ScenarioError(f"{what}: {self.name} ({self.md.modelName}) has no "
+                                f"{'/'.join(causality)} {var!r} (has: {', '.join(names)})")
+        return v
+
+    def want_output(self, var: str, what: str) -> tuple[str, int]:
+        v = self.variable(var, ("output",), what)
+        group = self.bool_out if v.type == "Boolean" else self.real_out
+        if var not in group:
+            group.append(var)
+        return ("bool" if v.type == "Boolean" else "real"), group.index(var)
+
+    def prepare(self) -> None:
+        """Preallocate the ctypes arrays for the batched calls of every step."""
+        def arrays(names, ctype):
+            vrs = (fmi2ValueReference * len(names))(*[self.variables[n].valueReference
+                                                      for n in names])
+            vals = (ctype * len(names))()
+            return vrs, vals, len(names)
+
+        self.out_vr, self.out_buf, self.n_out = arrays(self.real_out, fmi2Real)
+        self.bool_vr, self.bool_buf, self.n_bool = arrays(self.bool_out, fmi2Boolean)
+        self.in_vr, self.in_buf, self.n_in = arrays([i for i, _, _ in self.inputs], fmi2Real)
+        self.out_view = np.ctypeslib.as_array(self.out_buf) if self.n_out else np.zeros(0)
+        self.bool_view = np.ctypeslib.as_array(self.bool_buf) if self.n_bool else np.zeros(0)
+        # where each input comes from: (source's real-output view, index)
+        self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
+
+    # --- per-step calls (batched) ----------------------------------------------------------------
+    def pull_inputs(self) -> None:
+        if self.n_in:
+            buf = self.in_buf
+            for k, (src, idx) in enumerate(self.in_sources):
+                buf[k] = src.out_buf[idx]
+            self.fmu.fmi2SetReal(self.fmu.component, self.in_vr, self.n_in, buf)
+
+    def read_outputs(self) -> None:
+        if self.n_out:
+            self.fmu.fmi2GetReal(self.fmu.component, self.out_vr, self.n_out, self.out_buf)
+        if self.n_bool:
+            self.fmu.fmi2GetBoolean(self.fmu.component, self.bool_vr, self.n_bool, self.bool_buf)
+
+    def do_step(self, t: float, h: float) -> None:
+        self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
+
+
+class Master:
+    """Runs one scenario; subclasses define how a communication step exchanges and steps."""
+
+    name = "base"
+
+    def __init__(self, scenario: Scenario, fmu_paths: dict[str, Path]):
+        self.scenario = scenario
+        self.fmu_paths = fmu_paths
+
+    # --- the run -------------------------------------------------------------------------------
+    def run(self) -> RunResult:
+        sc = self.scenario
+        stop = stop_time(sc)
+        if sc.step > stop:
+            raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
+                                f"run ({stop:g} s)")
+        n_steps = max(1, math.ceil(stop / sc.step - 1e-9))
+        log = _LogCollector()
+        tmp = tempfile.mkdtemp(prefix="sewfmu_run_")
+        units: list[_Unit] = []
+        started = clock.perf_counter()
+        t = 0.0
+        phase = "loading"
+        current = None
+        try:
+            units = self._load(tmp, log)
+            columns = self._plan(units)
+            phase = "initialization"
+            for unit in units:
+                current = unit
+                self._initialize(unit, stop)
+            data = np.empty((n_steps + 1, len(columns)))
+            self._record(units, data, 0)
+            phase = "step"
+            for k in range(n_steps):
+                t = k * sc.step
+                h = min(sc.step, stop - t)
+                current = None
+                self.exchange_and_step(units, t, h)
+                self._record(units, data, k + 1)
+            times = np.minimum(np.arange(n_steps + 1) * sc.step, stop)
+        except FMICallException as err:
+            who = current.name if current is not None else self._culprit(units, log)
+            lines = log.for_instance(who) if who else log.lines
+            detail = "; ".join(lines[-3:]) if lines else "no log message"
+            raise CosimError(f"{who or 'an FMU'} failed during {phase} at t = {t:g} s: {err} "
+                             f"FMU log: {detail}") from None
+        finally:
+            self._free(units)
+            shutil.rmtree(tmp, ignore_errors=True)
+        wall = clock.perf_counter() - started
+        return RunResult(sc, times, {c: data[:, j] for j, c in enumerate(columns)}, wall, log.lines)
+
+    def exchange_and_step(self, units: list[_Unit], t: float, h: float) -> None:
+        raise NotImplementedError
+
+    # --- pieces of the run ---------------------------------------------------------------------
+    def _load(self, tmp: str, log: _LogCollector) -> list[_Unit]:
+        sc = self.scenario
+        unzip_dirs, descriptions = {}, {}
+        by_name = {}
+        for inst in sc.instances.values():
+            if inst.fmu not in self.fmu_paths:
+                raise ScenarioError(f"{sc.source}: instances.{inst.name}: unknown FMU {inst.fmu!r}")
+            path = self.fmu_paths[inst.fmu]
+            if inst.fmu not in unzip_dirs:
+                unzip_dirs[inst.fmu] = extract(str(path), unzipdir=str(Path(tmp) / inst.fmu))
+                descriptions[inst.fmu] = read_model_description(str(path))
+            by_name[inst.name] = _Unit(inst.name, path, unzip_dirs[inst.fmu],
+                                       descriptions[inst.fmu], log)
+        for con in sc.connections:
+            what = f"{sc.source}: connection {con}"
+            src, dst = by_name[con.src], by_name[con.dst]
+            out_var = src.variable(con.src_var, ("output",), what)
+            in_var = dst.variable(con.dst_var, ("input",), what)
+            if out_var.type != "Real" or in_var.type != "Real":
+                raise ScenarioError(f"{what}: only Real connections are supported")
+            if (out_var.unit or "") != (in_var.unit or ""):
+                raise ScenarioError(f"{what}: incompatible units {out_var.unit!r} -> {in_var.unit!r}")
+            src.want_output(con.src_var, what)
+            dst.inputs.append((con.dst_var, src, con.src_var))
+        for inst in sc.instances.values():
+            unit = by_name[inst.name]
+            for key, value in inst.parameters.items():
+                v = unit.variable(key, ("parameter",), f"{sc.source}: {inst.name}.{key}")
+                if v.type == "Integer" and value != int(value):
+                    raise ScenarioError(f"{inst.name}.{key}: must be an integer, got {value!r}")
+        return _dependency_order(list(by_name.values()), sc)
+
+    def _plan(self, units: list[_Unit]) -> list[str]:
+        """Decide which outputs are read each step; return the recorded column names."""
+        sc = self.scenario
+        by_name = {u.name: u for u in units}
+        if sc.record is None:
+            wanted = [f"{u.name}.{v.name}" for u in units for v in u.md.modelVariables
+                      if v.causality == "output"]
+        else:
+            wanted = list(sc.record)
+        self._record_plan = []
+        for col in wanted:
+            inst, dot, var = str(col).partition(".")
+            if inst not in by_name or not dot:
+                raise ScenarioError(f"{sc.source}: record {col!r}: unknown instance")
+            kind, idx = by_name[inst].want_output(var, f"{sc.source}: record {col!r}")
+            self._record_plan.append((by_name[inst], kind, idx))
+        for unit in units:
+            unit.prepare()
+        return wanted
+
+    def _initialize(self, unit: _Unit, stop: float) -> None:
+        """Instantiate, set parameters, take inputs from the already initialized sources."""
+        fmu = unit.fmu
+        fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=False)
+        unit.instantiated = True
+        fmu.setupExperiment(startTime=0.0, stopTime=stop)
+        fmu.enterInitializationMode()
+        for key, value in self.scenario.instances[unit.name].parameters.items():
+            v = unit.variables[key]
+            if v.type == "Integer":
+                fmu.setInteger([v.valueReference], [int(value)])
+            else:
+                fmu.setReal([v.valueReference], [float(value)])
+        unit.pull_inputs()
+        fmu.exitInitializationMode()
+        unit.read_outputs()
+
+    def _record(self, units, data: np.ndarray, row: int) -> None:
+        out = data[row]
+        for j, (unit, kind, idx) in enumerate(self._record_plan):
+            out[j] = unit.out_buf[idx] if kind == "real" else unit.bool_buf[idx]
+
+    @staticmethod
+    def _culprit(units, log: _LogCollector) -> str | None:
+        for line in reversed(log.lines):
+            if line.startswith(("[ERROR]", "[FATAL]", "[DISCARD]")):
+                return line.split("] ", 1)[1].split(":", 1)[0]
+        return None
+
+    @staticmethod
+    def _free(units: list[_Unit]) -> None:
+        for unit in units:
+            if unit.instantiated:
+                try:
+                    unit.fmu.terminate()
+                except Exception:
+                    pass           # an FMU in error may refuse to terminate; free it anyway
+                try:
+                    unit.fmu.freeInstance()
+                except Exception:
+                    pass
+
+
+class JacobiMaster(Master):
+    name = "jacobi"
+
+    def exchange_and_step(self, units, t, h):
+        for unit in units:
+            unit.do_step(t, h)
+        for unit in units:            # dependency order: feedthrough settles in one pass
+            unit.pull_inputs()
+            unit.read_outputs()
+
+
+class GaussSeidelMaster(Master):
+    name = "gauss-seidel"
+
+    def exchange_and_step(self, units, t, h):
+        for unit in units:
+            unit.pull_inputs()
+            unit.do_step(t, h)
+            unit.read_outputs()
+
+
+MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster)}
+
+
+def _dependency_order(units: list[_Unit], sc: Scenario) -> list[_Unit]:
+    """Sources before the units they feed (a cycle keeps the scenario's order within it)."""
+    order, placed = [], set()
+    remaining = list(units)
+    while remaining:
+        ready = [u for u in remaining
+                 if all(src.name in placed or src is u for _, src, _ in u.inputs)]
+        if not ready:            # a feedback loop: break it at the first unit in file order
+            ready = [remaining[0]]
+        for u in ready:
+            order.append(u)
+            placed.add(u.name)
+            remaining.remove(u)
+    return order
+
+
+def stop_time(sc: Scenario) -> float:
+    """The run's end: stop_time, or the time the shaft needs for the given revolutions."""
+    if sc.stop_time is not None:
+        return sc.stop_time
+    from components.parameters import ParameterError, with_values
+    from components.shaft import MainShaft, ShaftParams
+
+    inst = sc.instances[sc.shaft]
+    try:
+        params = with_values(ShaftParams(), **inst.parameters)
+    except ParameterError as err:
+        raise ScenarioError(f"{sc.source}: {sc.shaft}: {err}") from None
+    return MainShaft(params).time_of_angle(2 * math.pi * sc.revolutions)
+
+
+def run(scenario: Scenario, fmu_paths: dict[str, Path]) -> RunResult:
+    return MASTER_CLASSES[scenario.master](scenario, fmu_paths).run()

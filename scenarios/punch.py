@@ -1,0 +1,130 @@
+"""Key figures and plots of the punch drive, like the paper's figure 4 (the last revolution).
+
+The figures are computed from sampled signals, the same way for the co-simulation's recorded
+communication points and for the monolithic reference's dense samples:
+
+- contact intervals are the runs of samples with contact; an onset is placed where y crosses zero
+  (linear interpolation; y is smooth there), a loss where F2 reaches zero (F2 is continuous at a
+  loss: extrapolated from the last two samples in contact);
+- contact_onset_deg / contact_loss_deg: first onset and last loss in the last revolution, as the
+  crank angle within that revolution; contact_duration_deg: the angle with F2 > 0 in it;
+- F2_weld_mean: the mean of F2 over the middle half of [onset, loss], by crank angle.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+FIGURES = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "n_contacts",
+           "F2_peak", "F2_weld_mean")
+
+
+def _zero_between(a0, f0, a1, f1, lo, hi):
+    """Zero of the line through (a0, f0), (a1, f1), clipped to [lo, hi]."""
+    if f1 == f0:
+        return 0.5 * (lo + hi)
+    return min(max(a0 - f0 * (a1 - a0) / (f1 - f0), lo), hi)
+
+
+def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray) -> dict:
+    """The punch's key figures over the last shaft revolution of the samples."""
+    phi_end = phi[-1]
+    start = phi_end - 2 * math.pi
+    k0 = max(int(np.searchsorted(phi, start)) - 1, 0)      # one sample before, for the edges
+    ang = np.degrees(phi[k0:] - start)
+    y, F2 = y[k0:], F2[k0:]
+    on = np.asarray(contact[k0:], dtype=bool) & (F2 > 0)
+    intervals = []
+    k, n = 0, len(ang)
+    while k < n:
+        if not on[k]:
+            k += 1
+            continue
+        i0 = k
+        while k < n and on[k]:
+            k += 1
+        i1 = k - 1
+        if i0 == 0:
+            onset = ang[0]
+        elif y[i0 - 1] > 0 >= y[i0]:
+            onset = _zero_between(ang[i0 - 1], y[i0 - 1], ang[i0], y[i0], ang[i0 - 1], ang[i0])
+        elif i1 > i0:          # re-contact below the surface: extrapolate F2 back to zero
+            onset = _zero_between(ang[i0], F2[i0], ang[i0 + 1], F2[i0 + 1], ang[i0 - 1], ang[i0])
+        else:
+            onset = 0.5 * (ang[i0 - 1] + ang[i0])
+        if i1 == n - 1:
+            loss = ang[-1]
+        elif i1 > i0:
+            loss = _zero_between(ang[i1 - 1], F2[i1 - 1], ang[i1], F2[i1], ang[i1], ang[i1 + 1])
+        else:
+            loss = 0.5 * (ang[i1] + ang[i1 + 1])
+        onset, loss = max(onset, 0.0), min(loss, 360.0)
+        if loss > onset:
+            intervals.append((onset, loss))
+    if not intervals:
+        return {"contact_onset_deg": None, "contact_loss_deg": None, "contact_duration_deg": 0.0,
+                "n_contacts": 0, "F2_peak": float(F2[ang >= 0].max(initial=0.0)),
+                "F2_weld_mean": None}
+    onset, loss = intervals[0][0], intervals[-1][1]
+    quarter = 0.25 * (loss - onset)
+    return {
+        "contact_onset_deg": float(onset),
+        "contact_loss_deg": float(loss),
+        "contact_duration_deg": float(sum(b - a for a, b in intervals)),
+        "n_contacts": len(intervals),
+        "F2_peak": float(F2[ang >= 0].max()),
+        "F2_weld_mean": _mean_between(ang, F2, onset + quarter, loss - quarter),
+    }
+
+
+def _mean_between(x: np.ndarray, f: np.ndarray, a: float, b: float) -> float:
+    """Mean of f over [a, b] by the trapezoidal rule on the samples, edges interpolated."""
+    inside = (x > a) & (x < b)
+    xs = np.concatenate([[a], x[inside], [b]])
+    fs = np.concatenate([[np.interp(a, x, f)], f[inside], [np.interp(b, x, f)]])
+    return float(np.trapezoid(fs, xs) / (b - a))
+
+
+def summary_of_run(result, shaft="shaft", punch="punch") -> dict:
+    return summary(result[f"{shaft}.phi"], result[f"{punch}.y"], result[f"{punch}.F2"],
+                   result[f"{punch}.contact"])
+
+
+def summary_of_reference(ref) -> dict:
+    return summary(ref.phi, ref.y, ref.F2, ref.contact)
+
+
+# --- plots ------------------------------------------------------------------------------------
+def last_revolution(result, shaft="shaft"):
+    phi = result[f"{shaft}.phi"]
+    start = phi[-1] - 2 * math.pi
+    mask = phi >= start - 1e-12
+    return mask, np.degrees(phi[mask] - start)
+
+
+def plot(curves, path, title: str) -> None:
+    """y(φ) and F2(φ) over the last revolution; `curves` is a list of (label, run result)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_y, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
+    for label, result in curves:
+        mask, deg = last_revolution(result)
+        ax_y.plot(deg, result["punch.y"][mask] * 1e3, label=label)
+        ax_f.plot(deg, result["punch.F2"][mask], label=label)
+    ax_y.plot(deg, result["linkage.xi"][mask] * 1e3, "k:", lw=1, label="ξ (slider)")
+    ax_y.axhline(0.0, color="0.6", lw=0.8)
+    ax_y.set_ylabel("punch height y [mm]")
+    ax_f.set_ylabel("fabric force F2 [N]")
+    ax_f.set_xlabel("crank angle in the last revolution φ [°]")
+    ax_f.set_xlim(0, 360)
+    ax_f.set_xticks(range(0, 361, 45))
+    for ax in (ax_y, ax_f):
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,144 @@
+"""Run a scenario end to end: build what is missing, co-simulate, write results, plot, compare.
+
+These are the functions behind the command line; they are meant to be called from Python too.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import time as clock
+from pathlib import Path
+
+import numpy as np
+
+from components.build import default_fmu_dir, ensure_built
+
+from . import punch
+from .format import Scenario, ScenarioError
+from .master import RunResult, run, stop_time
+
+# what each scenario's `analysis` key selects: key figures, plots, monolithic reference
+ANALYSES = {"punch": punch}
+
+
+def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
+    from components.catalogue import FMUS
+
+    names = sorted({inst.fmu for inst in scenario.instances.values()})
+    unknown = [n for n in names if n not in FMUS]
+    if unknown:
+        raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
+                            f"(known: {', '.join(FMUS)})")
+    return ensure_built(names, fmu_dir or default_fmu_dir())
+
+
+def simulate(scenario: Scenario, fmu_dir: Path | None = None) -> RunResult:
+    return run(scenario, fmus_for(scenario, fmu_dir))
+
+
+def summarize(result: RunResult) -> dict:
+    sc = result.scenario
+    figures = {}
+    if sc.analysis in ANALYSES:
+        figures = ANALYSES[sc.analysis].summary_of_run(result)
+    return {"scenario": sc.name, "master": sc.master, "step": sc.step,
+            "stop_time": float(result.time[-1]), "wall_time_s": round(result.wall_time, 4),
+            **figures}
+
+
+def _write_atomic(path: Path, write) -> None:
+    """Write via a temporary file in the same folder, then rename: never a half-written file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def write_csv(result: RunResult, path: Path) -> None:
+    names = list(result.columns)
+    table = np.column_stack([result.time] + [result.columns[n] for n in names])
+    header = ",".join(["time"] + names)
+    _write_atomic(path, lambda f: np.savetxt(f, table, delimiter=",", header=header, comments="",
+                                             fmt="%.17g"))
+
+
+def write_json(data, path: Path) -> None:
+    _write_atomic(path, lambda f: (json.dump(data, f, indent=2), f.write("\n")))
+
+
+def variants(scenario: Scenario) -> list[tuple[str, Scenario]]:
+    """(label, scenario) for each run: one, or one per value of [compare]."""
+    if not scenario.compare:
+        return [("", scenario)]
+    out = []
+    param = scenario.compare["parameter"]
+    for value in scenario.compare["values"]:
+        sc = scenario.copy()
+        sc.set_value(param, value, origin=f"{scenario.source}: compare")
+        out.append((f"{param}={value:g}", sc))
+    return out
+
+
+def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
+                 fmu_dir: Path | None = None) -> dict:
+    """Run (each variant of) a scenario into out_dir; return the summary written there."""
+    out_dir = Path(out_dir)
+    runs = []
+    for label, sc in variants(scenario):
+        result = simulate(sc, fmu_dir)
+        where = out_dir / label if label else out_dir
+        write_csv(result, where / "results.csv")
+        summary = summarize(result)
+        write_json(summary, where / "summary.json")
+        runs.append((label, result, summary))
+    if scenario.compare:
+        summary = {"scenario": scenario.name, "compare": scenario.compare["parameter"],
+                   "runs": {label: s for label, _, s in runs}}
+        write_json(summary, out_dir / "summary.json")
+    else:
+        summary = runs[0][2]
+    if plot and scenario.analysis in ANALYSES:
+        curves = [(label or scenario.name, result) for label, result, _ in runs]
+        ANALYSES[scenario.analysis].plot(curves, out_dir / f"{scenario.name}.png",
+                                         scenario.description)
+    return summary
+
+
+def reference_summary(scenario: Scenario) -> tuple[dict, float]:
+    """Key figures of the monolithic reference (DOP853, tight tolerances) and its wall time."""
+    if scenario.analysis != "punch":
+        raise ScenarioError(f"{scenario.source}: no monolithic reference for analysis "
+                            f"{scenario.analysis!r}")
+    from . import punch_reference
+
+    params = {inst.fmu: dict(inst.parameters) for inst in scenario.instances.values()}
+    t_end = stop_time(scenario)
+    omega = params["MainShaft"].get("omega0", 100.0)
+    started = clock.perf_counter()
+    ref = punch_reference.solve(params["MainShaft"], params.get("PunchLinkage", {}),
+                                params.get("PunchContact", {}), t_end,
+                                sample_step=math.radians(0.01) / omega,
+                                sample_from=max(0.0, t_end - 2.2 * math.pi / omega))
+    wall = clock.perf_counter() - started
+    return punch.summary_of_reference(ref), wall
+
+
+def compare(scenario: Scenario, fmu_dir: Path | None = None) -> list[tuple[str, object, object, object]]:
+    """Rows (figure, co-simulation, reference, difference), plus the wall times."""
+    result = simulate(scenario, fmu_dir)
+    cosim = summarize(result)
+    ref, ref_wall = reference_summary(scenario)
+    rows = []
+    for key in punch.FIGURES:
+        a, b = cosim.get(key), ref.get(key)
+        diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
+        rows.append((key, a, b, diff))
+    rows.append(("wall_time_s", round(result.wall_time, 3), round(ref_wall, 3), None))
+    return rows
