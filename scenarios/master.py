@@ -16,10 +16,10 @@ through preallocated ctypes arrays (no lookups by name, no per-step allocation).
 """
 from __future__ import annotations
 
+import atexit
 import ctypes
 import math
 import shutil
-import tempfile
 import time as clock
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +52,21 @@ class RunResult:
         return self.columns[name]
 
 
+# FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
+# the FMU's library stays loaded (see Master._free), so it is loaded from one place only.
+_EXTRACTED: dict[tuple, tuple[str, object]] = {}
+
+
+def _extracted(path: Path) -> tuple[str, object]:
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
+    if key not in _EXTRACTED:
+        unzip_dir = extract(str(path))
+        atexit.register(shutil.rmtree, unzip_dir, True)
+        _EXTRACTED[key] = (unzip_dir, read_model_description(str(path)))
+    return _EXTRACTED[key]
+
+
 class _LogCollector:
     """FMU log callback that keeps the messages (for error reports) instead of printing them."""
 
@@ -79,7 +94,7 @@ class _LogCollector:
 class _Unit:
     """One FMU instance in the master, with its value references resolved."""
 
-    def __init__(self, name: str, fmu_path: Path, unzip_dir: str, md, log: _LogCollector):
+    def __init__(self, name: str, unzip_dir: str, md, log: _LogCollector):
         self.name = name
         self.md = md
         self.variables = {v.name: v for v in md.modelVariables}
@@ -158,14 +173,13 @@ class Master:
                                 f"run ({stop:g} s)")
         n_steps = max(1, math.ceil(stop / sc.step - 1e-9))
         log = _LogCollector()
-        tmp = tempfile.mkdtemp(prefix="sewfmu_run_")
         units: list[_Unit] = []
         started = clock.perf_counter()
         t = 0.0
         phase = "loading"
         current = None
         try:
-            units = self._load(tmp, log)
+            units = self._load(log)
             columns = self._plan(units)
             phase = "initialization"
             for unit in units:
@@ -189,7 +203,6 @@ class Master:
                              f"FMU log: {detail}") from None
         finally:
             self._free(units)
-            shutil.rmtree(tmp, ignore_errors=True)
         wall = clock.perf_counter() - started
         return RunResult(sc, times, {c: data[:, j] for j, c in enumerate(columns)}, wall, log.lines)
 
@@ -197,19 +210,14 @@ class Master:
         raise NotImplementedError
 
     # --- pieces of the run ---------------------------------------------------------------------
-    def _load(self, tmp: str, log: _LogCollector) -> list[_Unit]:
+    def _load(self, log: _LogCollector) -> list[_Unit]:
         sc = self.scenario
-        unzip_dirs, descriptions = {}, {}
         by_name = {}
         for inst in sc.instances.values():
             if inst.fmu not in self.fmu_paths:
                 raise ScenarioError(f"{sc.source}: instances.{inst.name}: unknown FMU {inst.fmu!r}")
-            path = self.fmu_paths[inst.fmu]
-            if inst.fmu not in unzip_dirs:
-                unzip_dirs[inst.fmu] = extract(str(path), unzipdir=str(Path(tmp) / inst.fmu))
-                descriptions[inst.fmu] = read_model_description(str(path))
-            by_name[inst.name] = _Unit(inst.name, path, unzip_dirs[inst.fmu],
-                                       descriptions[inst.fmu], log)
+            unzip_dir, md = _extracted(Path(self.fmu_paths[inst.fmu]))
+            by_name[inst.name] = _Unit(inst.name, unzip_dir, md, log)
         for con in sc.connections:
             what = f"{sc.source}: connection {con}"
             src, dst = by_name[con.src], by_name[con.dst]
@@ -287,9 +295,12 @@ class Master:
                 except Exception:
                     pass           # an FMU in error may refuse to terminate; free it anyway
                 try:
-                    unit.fmu.freeInstance()
+                    # free the instance but keep the library loaded: the extraction cache
+                    # reuses it, and unloading pythonfmu's binary from a Python host is unsafe
+                    unit.fmu.fmi2FreeInstance(unit.fmu.component)
                 except Exception:
                     pass
+                unit.instantiated = False
 
 
 class JacobiMaster(Master):
