@@ -114,8 +114,14 @@ def build_fmu(name: str, dest: Path | None = None) -> Path:
                                          slave=slave, doc=slave_doc, version=f"{VERSION}+{tag}"))
         saved_path = list(sys.path)
         try:
-            out = FmuBuilder.build_FMU(script, dest=dest / f"{name}.fmu", project_files=[pkg_dir],
-                                       canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+            built = FmuBuilder.build_FMU(script, dest=tmp / "out" / f"{name}.fmu",
+                                         project_files=[pkg_dir], canGetAndSetFMUstate=True,
+                                         canSerializeFMUstate=True)
+            # replace atomically: another process may be reading the old FMU right now
+            out = dest / f"{name}.fmu"
+            staged = dest / f".{name}.fmu.{os.getpid()}"
+            shutil.copy2(built, staged)
+            os.replace(staged, out)
         finally:
             # the builder imports the copies; forget them so this process keeps no stale modules
             sys.path[:] = saved_path

@@ -55,6 +55,8 @@ class PunchState:
     contact: bool          # fabric force F2 active
     spring_on: bool        # spring 11 transmits force (always True when bilateral)
     landings: int = 0      # contact onsets so far
+    F2_max: float = 0.0    # largest F2 during the last step (the impact at landing is a jump
+                           # that falls between communication points)
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,7 @@ class PunchOutputs:
     F3: float
     Delta: float
     contact: bool
+    F2_max: float
 
 
 class ZenoError(RuntimeError):
@@ -112,6 +115,9 @@ class _Piece:
         x2 = self.k2 * cmath.exp(self.l2 * tau)
         return py + (x1 + x2).real, pv + (self.l1 * x1 + self.l2 * x2).real
 
+    def accel(self, tau: float, y: float, v: float) -> float:
+        return (self.f0 + tau * (self.f1 + tau * self.f2) - self.b * v - self.c * y) / self.m
+
 
 class PunchContact:
     """The punch body's dynamics with exact piecewise integration and located switches."""
@@ -140,7 +146,7 @@ class PunchContact:
         elif p.compression_only:
             f3 = max(0.0, f3)
         a = (-f1 + f2 + f3) / p.m - GRAVITY
-        return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact)
+        return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact, max(s.F2_max, f2))
 
     # --- switching functions: negative while the current flag is consistent -------------------
     def _contact_g(self, y, v):
@@ -169,12 +175,16 @@ class PunchContact:
             # new inputs may have moved the slider: re-decide whether spring 11 bears
             spring_on = self._spring_g(y, v, x0, x1) < 0.0
         t0 = 0.0
+        f2_max = 0.0
         for _ in range(_MAX_SWITCHES_PER_STEP):
             piece = self._piece(y, v, contact, spring_on, x0, x1, x2, t0)
             event = self._first_switch(piece, contact, spring_on, x0, x1, x2, t0, h)
+            t_end = h if event is None else event[0]
+            if contact:
+                f2_max = max(f2_max, self._largest_F2(piece, t_end - t0))
             if event is None:
                 y, v = piece.state(h - t0)
-                return PunchState(y, v, contact, spring_on, landings)
+                return PunchState(y, v, contact, spring_on, landings, f2_max)
             t_switch, which = event
             y, v = piece.state(t_switch - t0)
             t0 = t_switch
@@ -185,6 +195,30 @@ class PunchContact:
                 spring_on = not spring_on
         raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP} contact switches within one step of "
                         f"{h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
+
+    def _largest_F2(self, piece: _Piece, length: float) -> float:
+        """Largest fabric force -(c2·y + b2·y') on a contact piece of the given length."""
+        c2, b2 = self.p.c2, self.p.b2
+
+        def force(tau):
+            y, v = piece.state(tau)
+            return -(c2 * y + b2 * v)
+
+        def slope(tau):
+            y, v = piece.state(tau)
+            return -(c2 * v + b2 * piece.accel(tau, y, v))
+
+        best = max(force(0.0), force(length))
+        lo, hi = 0.0, length
+        if slope(lo) > 0.0 > slope(hi):      # an interior maximum: bisect on the slope
+            while hi - lo > _TIME_RESOLUTION * 1e3:
+                mid = 0.5 * (lo + hi)
+                if slope(mid) > 0.0:
+                    lo = mid
+                else:
+                    hi = mid
+            best = max(best, force(0.5 * (lo + hi)))
+        return max(best, 0.0)
 
     def _piece(self, y, v, contact, spring_on, x0, x1, x2, t0) -> _Piece:
         """The exact solution from time t0 of the step, in the current contact/spring mode."""

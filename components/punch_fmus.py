@@ -60,6 +60,8 @@ class PunchContactSlave(SewSlave):
         Port("F3", "N", "force of spring 11", feedthrough=True),
         Port("Delta", "m", "deformation of spring 11: xi - y", feedthrough=True),
         Port("contact", "1", "punch presses on the fabric (F2 > 0)", kind="Boolean"),
+        Port("F2_max", "N", "largest F2 during the last communication step (catches the impact "
+                            "at landing, which falls between communication points)"),
     )
 
     def __init__(self, **kwargs):

@@ -7,9 +7,13 @@ whatever happens. A variant declares only its `exchange_and_step`:
 - Jacobi: every FMU steps from the values at t; then, in dependency order, each FMU's inputs are
   set from its sources' outputs at t + h (a direct-feedthrough FMU's outputs follow its new inputs
   before the next FMU reads them).
-- Gauss–Seidel: FMUs step one after another in dependency order, each fed its sources' newest
-  outputs just before its own step, so an FMU fed by one that has already stepped starts its step
-  with values of t + h.
+- Gauss–Seidel: FMUs step one after another, each fed its sources' newest outputs just before
+  its own step. The sweep runs against the data flow (consumers first): along a chain every FMU
+  still starts its step from inputs at t, as the contract above requires, while a feedback signal
+  reaches the FMU that steps after its source fresh, at t + h (the point of Gauss–Seidel). The
+  textbook producers-first sweep would hand each consumer values of t + h as if they were of t:
+  FMUs that extrapolate their inputs then run one step early per link, a first-order error
+  (1.15° of crank angle at h = 1e-4 s on punch_drive, two links).
 
 Value references are resolved once; each step makes one batched set and one batched get per FMU
 through preallocated ctypes arrays (no lookups by name, no per-step allocation).
@@ -318,7 +322,7 @@ class GaussSeidelMaster(Master):
     name = "gauss-seidel"
 
     def exchange_and_step(self, units, t, h):
-        for unit in units:
+        for unit in reversed(units):      # consumers first: see the module docstring
             unit.pull_inputs()
             unit.do_step(t, h)
             unit.read_outputs()

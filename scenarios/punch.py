@@ -27,13 +27,18 @@ def _zero_between(a0, f0, a1, f1, lo, hi):
     return min(max(a0 - f0 * (a1 - a0) / (f1 - f0), lo), hi)
 
 
-def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray) -> dict:
-    """The punch's key figures over the last shaft revolution of the samples."""
+def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray,
+            F2_max: np.ndarray | None = None) -> dict:
+    """The punch's key figures over the last shaft revolution of the samples. F2_max, where
+    given, is the largest F2 within each sample interval (the FMU's peak hold)."""
     phi_end = phi[-1]
     start = phi_end - 2 * math.pi
     k0 = max(int(np.searchsorted(phi, start)) - 1, 0)      # one sample before, for the edges
     ang = np.degrees(phi[k0:] - start)
     y, F2 = y[k0:], F2[k0:]
+    peaks = F2 if F2_max is None else np.maximum(F2, F2_max[k0:])
+    # a sample's peak hold covers the interval before it: count those ending inside the revolution
+    F2_peak = float(peaks[ang > 0].max(initial=0.0))
     on = np.asarray(contact[k0:], dtype=bool) & (F2 > 0)
     intervals = []
     k, n = 0, len(ang)
@@ -64,7 +69,7 @@ def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray)
             intervals.append((onset, loss))
     if not intervals:
         return {"contact_onset_deg": None, "contact_loss_deg": None, "contact_duration_deg": 0.0,
-                "n_contacts": 0, "F2_peak": float(F2[ang >= 0].max(initial=0.0)),
+                "n_contacts": 0, "F2_peak": F2_peak,
                 "F2_weld_mean": None}
     onset, loss = intervals[0][0], intervals[-1][1]
     quarter = 0.25 * (loss - onset)
@@ -73,7 +78,7 @@ def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray)
         "contact_loss_deg": float(loss),
         "contact_duration_deg": float(sum(b - a for a, b in intervals)),
         "n_contacts": len(intervals),
-        "F2_peak": float(F2[ang >= 0].max()),
+        "F2_peak": F2_peak,
         "F2_weld_mean": _mean_between(ang, F2, onset + quarter, loss - quarter),
     }
 
@@ -88,7 +93,7 @@ def _mean_between(x: np.ndarray, f: np.ndarray, a: float, b: float) -> float:
 
 def summary_of_run(result, shaft="shaft", punch="punch") -> dict:
     return summary(result[f"{shaft}.phi"], result[f"{punch}.y"], result[f"{punch}.F2"],
-                   result[f"{punch}.contact"])
+                   result[f"{punch}.contact"], result.columns.get(f"{punch}.F2_max"))
 
 
 def summary_of_reference(ref) -> dict:

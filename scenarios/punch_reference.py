@@ -105,7 +105,9 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
             n_rhs) -> ReferenceSolution:
     k0 = int(math.ceil(sample_from / sample_step - 1e-9))
     k1 = int(math.floor(t_end / sample_step + 1e-9))
-    times = np.unique(np.concatenate([np.arange(k0, k1 + 1) * sample_step, [t_end]]))
+    # the switch instants are samples too: the impact force is a jump at the onset
+    inside = [t for t in switches if sample_from <= t <= t_end]
+    times = np.unique(np.concatenate([np.arange(k0, k1 + 1) * sample_step, inside, [t_end]]))
     y = np.empty_like(times)
     v = np.empty_like(times)
     contact = np.zeros(times.shape, dtype=bool)
