@@ -78,17 +78,23 @@ class PunchLinkage:
             self.y_top = 0.0
 
     # --- six-bar -----------------------------------------------------------------------------
-    def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
-        """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
+    def joints(self, alpha, alpha_rate=0.0, alpha_accel=0.0) -> dict[str, Motion]:
+        """Motion of every joint (O1, A, O2, B, C, D) for crank angle alpha (CCW from +x)."""
         p = self.p
+        o1 = Motion(0.0, 0.0)
         o2 = Motion(p.x_O2, p.y_O2)
-        a = point_on_link(Motion(0.0, 0.0), p.L_O1A, angle(alpha, alpha_rate, alpha_accel))
+        a = point_on_link(o1, p.L_O1A, angle(alpha, alpha_rate, alpha_accel))
         # B on the +x side of A -> O2, i.e. on the right of that (upward) line
         b = dyad_rrr(a, p.L_AB, o2, p.L_O2B, RIGHT, name="coupler AB / rocker O2B")
         rocker = link_angle(o2, b)
         c = point_on_link(o2, p.L_O2C, rocker, offset=-p.angle_BO2C)
         # D below C on the vertical line x = x_D
-        return dyad_rrp(c, p.L_CD, (p.x_D, 0.0), math.pi / 2, -1, name="rod CD / slider line")
+        d = dyad_rrp(c, p.L_CD, (p.x_D, 0.0), math.pi / 2, -1, name="rod CD / slider line")
+        return {"O1": o1, "A": a, "O2": o2, "B": b, "C": c, "D": d}
+
+    def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
+        """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
+        return self.joints(alpha, alpha_rate, alpha_accel)["D"]
 
     def _check_assembly(self) -> None:
         alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
