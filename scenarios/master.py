@@ -264,7 +264,7 @@ class Master:
     def _initialize(self, unit: _Unit, stop: float) -> None:
         """Instantiate, set parameters, take inputs from the already initialized sources."""
         fmu = unit.fmu
-        fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=False)
+        fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=True)
         unit.instantiated = True
         fmu.setupExperiment(startTime=0.0, stopTime=stop)
         fmu.enterInitializationMode()

@@ -1,0 +1,218 @@
+"""The FMUs as FMI components: validation, the co-simulation contract, parameter and input
+checks, state save and restore, and running from the .fmu file alone."""
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from components.punch_contact import GRAVITY, PunchContactParams
+from components.punch_linkage import PunchLinkage
+from tests.fmu_host import Host
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def test_every_fmu_passes_fmpy_validate(fmu_paths):
+    assert set(fmu_paths) == {"MainShaft", "PunchLinkage", "PunchContact"}
+    for name, path in fmu_paths.items():
+        assert validate_fmu(str(path)) == [], name
+
+
+def test_every_variable_has_a_unit_and_a_description(fmu_paths):
+    for path in fmu_paths.values():
+        md = Host(path).md
+        for v in md.modelVariables:
+            assert v.description, v.name
+            if v.type == "Real":
+                assert v.unit, v.name
+
+
+def test_outputs_declare_their_dependency_on_inputs(fmu_paths):
+    md = Host(fmu_paths["PunchContact"]).md
+    deps = {u.variable.name: [d.name for d in u.dependencies] for u in md.outputs}
+    assert deps["y"] == [] and deps["F2"] == []              # state only
+    assert deps["F3"] == ["xi", "xi_dot", "xi_ddot"]          # direct feedthrough
+    md = Host(fmu_paths["PunchLinkage"]).md
+    assert all(len(u.dependencies) == 3 for u in md.outputs)
+
+
+# --- the co-simulation contract -----------------------------------------------------------------
+def test_outputs_after_initialization_follow_the_inputs_set_during_it(fmu_paths):
+    link = Host(fmu_paths["PunchLinkage"])
+    link.set(phi=1.0, omega=120.0, epsilon=50.0)
+    link.fmu.exitInitializationMode()
+    e = PunchLinkage().excitation(1.0, 120.0, 50.0)
+    assert link.get("xi", "xi_dot", "xi_ddot") == pytest.approx([e.xi, e.xi_dot, e.xi_ddot],
+                                                                rel=1e-12)
+    # direct feedthrough: new inputs, same instant, new outputs (no step)
+    link.set(phi=2.0)
+    assert link.get("xi") == pytest.approx(PunchLinkage().excitation(2.0, 120.0, 50.0).xi)
+    punch = Host(fmu_paths["PunchContact"])
+    punch.set(xi=3.7e-3, xi_dot=0.0, xi_ddot=0.0)
+    punch.fmu.exitInitializationMode()
+    assert punch.get("y", "y_dot", "Delta", "contact") == [3.7e-3, 0.0, 0.0, False]
+
+
+def test_outputs_after_a_step_are_values_at_its_end(fmu_paths):
+    """The linkage extrapolates its inputs over the step (Taylor): after doStep(t, h) its outputs
+    are the excitation at t + h even if the host does not set new inputs (libcosim, ecos)."""
+    link = Host(fmu_paths["PunchLinkage"])
+    link.set(phi=0.5, omega=100.0, epsilon=400.0)
+    link.fmu.exitInitializationMode()
+    h = 1e-3
+    link.fmu.doStep(0.0, h)
+    e = PunchLinkage().excitation(0.5 + 100.0 * h + 0.5 * 400.0 * h * h, 100.0 + 400.0 * h, 400.0)
+    assert link.get("xi", "xi_dot") == pytest.approx([e.xi, e.xi_dot], rel=1e-12)
+    shaft = Host(fmu_paths["MainShaft"])
+    shaft.set(omega0=80.0)
+    shaft.fmu.exitInitializationMode()
+    shaft.fmu.doStep(0.0, 0.25)
+    assert shaft.get("phi", "omega") == pytest.approx([20.0, 80.0])
+
+
+# --- bad parameters and inputs -----------------------------------------------------------------
+@pytest.mark.parametrize("fmu, values, words", [
+    ("PunchContact", {"m": -1.0}, ["parameter m", "> 0"]),
+    ("PunchContact", {"c1": float("nan")}, ["parameter c1", "finite"]),
+    ("PunchContact", {"compression_only": 3}, ["parameter compression_only"]),
+    ("MainShaft", {"omega0": 0.0}, ["parameter omega0"]),
+    ("PunchLinkage", {"L_AB": 29.0e-3}, ["cannot be assembled", "crank angle alpha ="]),
+])
+def test_bad_parameters_fail_initialization_with_a_log_line_naming_them(fmu_paths, fmu, values,
+                                                                          words):
+    host = Host(fmu_paths[fmu])
+    host.set(**values)
+    with pytest.raises(FMICallException):
+        host.fmu.exitInitializationMode()
+    errors = [line for line in host.log.lines if line.startswith("[ERROR]")]
+    assert errors, host.log_text()
+    for word in words:
+        assert word in errors[0]
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_nan_or_infinite_inputs_are_refused_by_do_step(fmu_paths, bad):
+    punch = Host(fmu_paths["PunchContact"])
+    punch.set(xi=4e-3)
+    punch.fmu.exitInitializationMode()
+    punch.fmu.doStep(0.0, 1e-4)
+    punch.set(xi_dot=bad)
+    with pytest.raises(FMICallException):
+        punch.fmu.doStep(1e-4, 1e-4)
+    assert "input xi_dot" in punch.log_text()
+
+
+# --- state -----------------------------------------------------------------------------------
+def _punch_chain(fmu_paths):
+    shaft, link, punch = (Host(fmu_paths[n], n) for n in ("MainShaft", "PunchLinkage",
+                                                          "PunchContact"))
+    shaft.set(omega0=150.0)
+    shaft.fmu.exitInitializationMode()
+    link.set(**dict(zip(("phi", "omega", "epsilon"), shaft.get("phi", "omega", "epsilon"))))
+    link.fmu.exitInitializationMode()
+    punch.set(**dict(zip(("xi", "xi_dot", "xi_ddot"), link.get("xi", "xi_dot", "xi_ddot"))))
+    punch.fmu.exitInitializationMode()
+    return shaft, link, punch
+
+
+def _jacobi_steps(chain, t0, n, h):
+    shaft, link, punch = chain
+    out = []
+    for k in range(n):
+        t = t0 + k * h
+        for unit in chain:
+            unit.fmu.doStep(t, h)
+        link.set(**dict(zip(("phi", "omega", "epsilon"), shaft.get("phi", "omega", "epsilon"))))
+        punch.set(**dict(zip(("xi", "xi_dot", "xi_ddot"), link.get("xi", "xi_dot", "xi_ddot"))))
+        out.append(tuple(punch.get("y", "y_dot", "F2", "F3", "F2_max", "contact")))
+    return out
+
+
+@pytest.mark.parametrize("serialize", [False, True])
+def test_restored_state_repeats_the_steps_bit_for_bit(fmu_paths, serialize):
+    chain = _punch_chain(fmu_paths)
+    h = 2e-4
+    _jacobi_steps(chain, 0.0, 60, h)                  # into the contact phase (φ ≈ 103°)
+    states = [u.fmu.getFMUstate() for u in chain]
+    if serialize:
+        blobs = [u.fmu.serializeFMUstate(s) for u, s in zip(chain, states)]
+    first = _jacobi_steps(chain, 60 * h, 80, h)
+    assert any(row[-1] for row in first) and not all(row[-1] for row in first)  # a landing
+    if serialize:
+        states = [u.fmu.deSerializeFMUstate(b) for u, b in zip(chain, blobs)]
+    for unit, state in zip(chain, states):
+        unit.fmu.setFMUstate(state)
+    second = _jacobi_steps(chain, 60 * h, 80, h)
+    assert first == second                            # exactly, not approximately
+
+
+# --- the FMU runs the code it carries ----------------------------------------------------------
+_ALONE = r'''
+import importlib.abc, json, sys
+repo, path, spec = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+
+class NoRepository(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in ("components", "scenarios", "tests"):
+            raise ImportError("the repository is not on this path: " + name)
+        return None
+
+sys.meta_path.insert(0, NoRepository())
+sys.path[:] = [p for p in sys.path
+            if p and not (p.startswith(repo) and not p.startswith(sys.prefix))]
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+md = read_model_description(path)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+unzip = str(extract(path))
+fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
+                modelIdentifier=md.coSimulation.modelIdentifier, instanceName="alone")
+fmu.instantiate()
+fmu.setupExperiment(startTime=0.0)
+fmu.enterInitializationMode()
+for name, value in spec["set"].items():
+    fmu.setReal([vr[name]], [value])
+fmu.exitInitializationMode()
+for k in range(spec["steps"]):
+    fmu.doStep(k * spec["h"], spec["h"])
+out = dict(zip(spec["get"], fmu.getReal([vr[n] for n in spec["get"]])))
+carried = sorted({m.__file__ for n, m in sys.modules.items()
+                  if n.startswith("sewfmu_") and getattr(m, "__file__", None)})
+print(json.dumps({"out": out, "unzip": unzip, "modules": carried}))
+'''
+
+
+def _run_alone(tmp_path, fmu_path, spec):
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    proc = subprocess.run([sys.executable, "-c", _ALONE, str(REPO), str(fmu_path),
+                           json.dumps(spec)], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["modules"], "no sewfmu module was loaded from the FMU"
+    for module_file in result["modules"]:
+        assert module_file.startswith(result["unzip"]), module_file
+    return result["out"]
+
+
+def test_each_fmu_runs_from_its_file_alone_in_a_fresh_process(fmu_paths, tmp_path):
+    out = _run_alone(tmp_path, fmu_paths["MainShaft"],
+                     {"set": {"omega0": 40.0}, "steps": 10, "h": 0.01, "get": ["phi"]})
+    assert out["phi"] == pytest.approx(4.0, rel=1e-12)
+    out = _run_alone(tmp_path, fmu_paths["PunchLinkage"],
+                     {"set": {"phi": 0.0, "omega": 0.0}, "steps": 1, "h": 0.01,
+                      "get": ["xi", "psi"]})
+    assert out == pytest.approx({"xi": 4.5e-3, "psi": 0.0}, abs=1e-15)   # the setup position
+    # the punch settles under a still slider where the forces balance (closed form)
+    p = PunchContactParams()
+    xi = 2.0e-3
+    out = _run_alone(tmp_path, fmu_paths["PunchContact"],
+                     {"set": {"xi": xi}, "steps": 400, "h": 1e-3, "get": ["y"]})
+    assert out["y"] == pytest.approx((-p.F10 + p.c3 * xi - p.m * GRAVITY) / (p.c1 + p.c3),
+                                     abs=1e-12)
