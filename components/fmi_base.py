@@ -164,10 +164,8 @@ class SewSlave(Fmi2Slave):
             try:
                 params = replace(type(self).params_class(), **values)
                 self._model = self.build_model(params)
-            except ParameterError as err:
-                self._fail(f"{self.instance_name}: {err}")
-            except AssemblyError as err:
-                self._fail(f"{self.instance_name}: geometry parameters: {err}")
+            except (ParameterError, AssemblyError) as err:
+                self._fail(str(err))
             self._model_key = key
         return self._model
 
@@ -184,8 +182,7 @@ class SewSlave(Fmi2Slave):
     def _check_inputs(self) -> None:
         for name, value in self._inputs.items():
             if not math.isfinite(value):
-                self._fail(f"{self.instance_name}: input {name} is {value} at t = {self._time:g} s; "
-                           f"refusing to step")
+                self._fail(f"input {name} is {value} at t = {self._time:g} s; refusing to step")
 
     # --- FMI calls -----------------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):

@@ -71,6 +71,13 @@ def _extracted(path: Path) -> tuple[str, object]:
     return _EXTRACTED[key]
 
 
+def _reason(lines: list[str], err: Exception) -> str:
+    """The FMU's own error message if it logged one, else the failed call; on one line."""
+    errors = [line.split(": ", 1)[-1] for line in lines if line.startswith("[ERROR]")]
+    text = errors[-1] if errors else (lines[-1] if lines else str(err))
+    return " ".join(text.split())
+
+
 class _LogCollector:
     """FMU log callback that keeps the messages (for error reports) instead of printing them."""
 
@@ -106,6 +113,7 @@ class _Unit:
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         self.log = log
         self.instantiated = False
+        self.failed = False          # a call of this instance failed: make no further calls
         self.real_out: list[str] = []       # outputs read every step, in order
         self.bool_out: list[str] = []
         self.inputs: list[tuple[str, "_Unit", str]] = []   # (input, source unit, source output)
@@ -141,22 +149,35 @@ class _Unit:
         # where each input comes from: (source's real-output view, index)
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
 
-    # --- per-step calls (batched) ----------------------------------------------------------------
+    # --- per-step calls (batched); a failure marks the instance (try costs nothing otherwise) ---
     def pull_inputs(self) -> None:
         if self.n_in:
             buf = self.in_buf
             for k, (src, idx) in enumerate(self.in_sources):
                 buf[k] = src.out_buf[idx]
-            self.fmu.fmi2SetReal(self.fmu.component, self.in_vr, self.n_in, buf)
+            try:
+                self.fmu.fmi2SetReal(self.fmu.component, self.in_vr, self.n_in, buf)
+            except FMICallException:
+                self.failed = True
+                raise
 
     def read_outputs(self) -> None:
-        if self.n_out:
-            self.fmu.fmi2GetReal(self.fmu.component, self.out_vr, self.n_out, self.out_buf)
-        if self.n_bool:
-            self.fmu.fmi2GetBoolean(self.fmu.component, self.bool_vr, self.n_bool, self.bool_buf)
+        try:
+            if self.n_out:
+                self.fmu.fmi2GetReal(self.fmu.component, self.out_vr, self.n_out, self.out_buf)
+            if self.n_bool:
+                self.fmu.fmi2GetBoolean(self.fmu.component, self.bool_vr, self.n_bool,
+                                        self.bool_buf)
+        except FMICallException:
+            self.failed = True
+            raise
 
     def do_step(self, t: float, h: float) -> None:
-        self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
+        try:
+            self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
+        except FMICallException:
+            self.failed = True
+            raise
 
 
 class Master:
@@ -181,13 +202,11 @@ class Master:
         started = clock.perf_counter()
         t = 0.0
         phase = "loading"
-        current = None
         try:
             units = self._load(log)
             columns = self._plan(units)
             phase = "initialization"
             for unit in units:
-                current = unit
                 self._initialize(unit, stop)
             data = np.empty((n_steps + 1, len(columns)))
             self._record(units, data, 0)
@@ -195,16 +214,14 @@ class Master:
             for k in range(n_steps):
                 t = k * sc.step
                 h = min(sc.step, stop - t)
-                current = None
                 self.exchange_and_step(units, t, h)
                 self._record(units, data, k + 1)
             times = np.minimum(np.arange(n_steps + 1) * sc.step, stop)
         except FMICallException as err:
-            who = current.name if current is not None else self._culprit(units, log)
-            lines = log.for_instance(who) if who else log.lines
-            detail = "; ".join(lines[-3:]) if lines else "no log message"
-            raise CosimError(f"{who or 'an FMU'} failed during {phase} at t = {t:g} s: {err} "
-                             f"FMU log: {detail}") from None
+            failed = [u for u in units if u.failed]
+            who = failed[0].name if failed else "an FMU"
+            raise CosimError(f"{who} failed during {phase} at t = {t:g} s: "
+                             f"{_reason(log.for_instance(who), err)}") from None
         finally:
             self._free(units)
         wall = clock.perf_counter() - started
@@ -266,6 +283,14 @@ class Master:
         fmu = unit.fmu
         fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=True)
         unit.instantiated = True
+        try:
+            self._set_up(unit, stop)
+        except FMICallException:
+            unit.failed = True
+            raise
+
+    def _set_up(self, unit: _Unit, stop: float) -> None:
+        fmu = unit.fmu
         fmu.setupExperiment(startTime=0.0, stopTime=stop)
         fmu.enterInitializationMode()
         for key, value in self.scenario.instances[unit.name].parameters.items():
@@ -284,16 +309,11 @@ class Master:
             out[j] = unit.out_buf[idx] if kind == "real" else unit.bool_buf[idx]
 
     @staticmethod
-    def _culprit(units, log: _LogCollector) -> str | None:
-        for line in reversed(log.lines):
-            if line.startswith(("[ERROR]", "[FATAL]", "[DISCARD]")):
-                return line.split("] ", 1)[1].split(":", 1)[0]
-        return None
-
-    @staticmethod
     def _free(units: list[_Unit]) -> None:
         for unit in units:
-            if unit.instantiated:
+            # after a failed call FMI allows no further call on that instance (pythonfmu
+            # reports every Python exception as fmi2Fatal and has already dropped its objects)
+            if unit.instantiated and not unit.failed:
                 try:
                     unit.fmu.terminate()
                 except Exception:

@@ -34,9 +34,9 @@ class ReferenceSolution:
 
 def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: float,
           sample_from: float = 0.0, method: str = "DOP853", rtol: float = 1e-10,
-          atol: float = 1e-13) -> ReferenceSolution:
+          atol: float = 1e-13, sample_switches: bool = True) -> ReferenceSolution:
     """Solve the punch drive from the setup position to t_end; sample the solution every
-    sample_step from sample_from on."""
+    sample_step from sample_from on, and at the switch instants if sample_switches."""
     sh = MainShaft(with_values(ShaftParams(), **shaft))
     lk = PunchLinkage(with_values(PunchLinkageParams(), **linkage))
     p = with_values(PunchContactParams(), **punch)
@@ -98,7 +98,8 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
                 contact = not contact
             else:
                 spring_on = not spring_on
-    return _sample(pieces, t_end, sample_step, sample_from, sh, lk, p, switches, n_rhs)
+    return _sample(pieces, t_end, sample_step, sample_from, sh, lk, p,
+                   switches if sample_switches else [], n_rhs)
 
 
 def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches,
@@ -122,4 +123,4 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
     e = linkage.excitation(motion[:, 0], motion[:, 1], motion[:, 2])
     f2 = np.where(contact, np.maximum(-(p.c2 * y + p.b2 * v), 0.0), 0.0)
     f3 = np.where(spring_on, p.F30 + p.c3 * (e.xi - y) + p.b3 * (e.xi_dot - v), 0.0)
-    return ReferenceSolution(times, motion[:, 0], y, v, f2, f3, contact, switches, n_rhs)
+    return ReferenceSolution(times, motion[:, 0], y, v, f2, f3, contact, list(switches), n_rhs)
