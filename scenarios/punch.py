@@ -129,7 +129,8 @@ def plot(curves, path, title: str) -> None:
     for ax in (ax_y, ax_f):
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    fig.suptitle(title)
+    import textwrap
+    fig.suptitle("\n".join(textwrap.wrap(title, 80)), fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
