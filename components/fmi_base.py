@@ -79,6 +79,8 @@ class SewSlave(Fmi2Slave):
     outputs: Sequence[Port] = ()
     calculated: Sequence[Port] = ()
     model_name = ""                # the FMU's modelName / modelIdentifier
+    # input triples (value, its rate, its acceleration) extrapolated inside a step by Taylor
+    taylor_inputs: Sequence[tuple[str, str, str]] = ()
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -88,11 +90,9 @@ class SewSlave(Fmi2Slave):
         self._param_info = parameter_info(cls.params_class) if cls.params_class else []
         self._params = {p.name: p.default for p in self._param_info}
         self._inputs = {p.name: float(p.start) for p in cls.inputs}
-        self._input_vrs: set[int] = set()
         self._elapsed = 0.0            # time since the inputs were last set (for extrapolation)
         self._time = 0.0
         self._model = None
-        self._model_key = None
         self._cache: dict[str, Any] | None = None
         self._register_all()
 
@@ -105,12 +105,10 @@ class SewSlave(Fmi2Slave):
                 description=f"{info.description} [{info.unit}]",
                 getter=self._param_getter(info.name), setter=self._param_setter(info.name)))
         for port in type(self).inputs:
-            var = Real(port.name, causality=Fmi2Causality.input,
-                       variability=Fmi2Variability.continuous, start=port.start,
-                       description=f"{port.description} [{port.unit}]",
-                       getter=self._input_getter(port.name), setter=self._input_setter(port.name))
-            self.register_variable(var)
-            self._input_vrs.add(var.value_reference)
+            self.register_variable(Real(
+                port.name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
+                start=port.start, description=f"{port.description} [{port.unit}]",
+                getter=self._input_getter(port.name), setter=self._input_setter(port.name)))
         for port in type(self).outputs:
             var_type = Boolean if port.kind == "Boolean" else Real
             variability = (Fmi2Variability.discrete if port.kind == "Boolean"
@@ -132,6 +130,7 @@ class SewSlave(Fmi2Slave):
     def _param_setter(self, name: str) -> Callable[[Any], None]:
         def set_param(value):
             self._params[name] = value
+            self._model = None        # rebuilt (and checked) with the new value when next needed
             self._cache = None
         return set_param
 
@@ -155,8 +154,7 @@ class SewSlave(Fmi2Slave):
     # --- the model -----------------------------------------------------------------------------
     def model(self):
         """The plain-Python model for the current parameter values (built, and checked, once)."""
-        key = tuple(self._params[p.name] for p in self._param_info)
-        if self._model is None or key != self._model_key:
+        if self._model is None:
             values = {}
             for info in self._param_info:
                 value = self._params[info.name]
@@ -166,7 +164,6 @@ class SewSlave(Fmi2Slave):
                 self._model = self.build_model(params)
             except (ParameterError, AssemblyError) as err:
                 self._fail(str(err))
-            self._model_key = key
         return self._model
 
     def _fail(self, message: str) -> None:
@@ -175,9 +172,14 @@ class SewSlave(Fmi2Slave):
         raise FmuError(message)
 
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
-        """Inputs extrapolated by dt from where they were set. The default holds them; an FMU
-        that is given derivative inputs overrides this with its Taylor polynomial."""
-        return dict(self._inputs)
+        """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs`
+        triple (x, x', x'') by its Taylor polynomial, any other input held."""
+        u = dict(self._inputs)
+        for value, rate, accel in type(self).taylor_inputs:
+            x, dx, ddx = u[value], u[rate], u[accel]
+            u[value] = x + dt * (dx + 0.5 * dt * ddx)
+            u[rate] = dx + dt * ddx
+        return u
 
     def _check_inputs(self) -> None:
         for name, value in self._inputs.items():
@@ -207,6 +209,8 @@ class SewSlave(Fmi2Slave):
                 "elapsed": self._elapsed, "time": self._time, "internal": self.save_internal()}
 
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
+        if state["params"] != self._params:
+            self._model = None
         self._params = dict(state["params"])
         self._inputs = dict(state["inputs"])
         self._elapsed = state["elapsed"]

@@ -16,6 +16,7 @@ class PunchLinkageSlave(SewSlave):
         Port("omega", "rad/s", "shaft speed"),
         Port("epsilon", "rad/s2", "shaft angular acceleration"),
     )
+    taylor_inputs = (("phi", "omega", "epsilon"),)
     outputs = (
         Port("xi", "m", "kinematic excitation of the punch: xi0 - psi", feedthrough=True),
         Port("xi_dot", "m/s", "d(xi)/dt", feedthrough=True),
@@ -26,19 +27,11 @@ class PunchLinkageSlave(SewSlave):
     def build_model(self, params):
         return PunchLinkage(params)
 
-    def extrapolated_inputs(self, dt):
-        u = self._inputs
-        return {"phi": u["phi"] + dt * (u["omega"] + 0.5 * dt * u["epsilon"]),
-                "omega": u["omega"] + dt * u["epsilon"], "epsilon": u["epsilon"]}
-
     def current_outputs(self):
         u = self.extrapolated_inputs(self._elapsed)
         e = self.model().excitation(u["phi"], u["omega"], u["epsilon"])
         return {"xi": float(e.xi), "xi_dot": float(e.xi_dot), "xi_ddot": float(e.xi_ddot),
                 "psi": float(e.psi)}
-
-    def save_internal(self):
-        return {}
 
 
 class PunchContactSlave(SewSlave):
@@ -51,6 +44,7 @@ class PunchContactSlave(SewSlave):
         Port("xi_dot", "m/s", "d(xi)/dt"),
         Port("xi_ddot", "m/s2", "d2(xi)/dt2"),
     )
+    taylor_inputs = (("xi", "xi_dot", "xi_ddot"),)
     outputs = (
         Port("y", "m", "punch height above the fabric (< 0: pressing into it)"),
         Port("y_dot", "m/s", "punch velocity"),
@@ -70,11 +64,6 @@ class PunchContactSlave(SewSlave):
 
     def build_model(self, params):
         return PunchContact(params)
-
-    def extrapolated_inputs(self, dt):
-        u = self._inputs
-        return {"xi": u["xi"] + dt * (u["xi_dot"] + 0.5 * dt * u["xi_ddot"]),
-                "xi_dot": u["xi_dot"] + dt * u["xi_ddot"], "xi_ddot": u["xi_ddot"]}
 
     def _state_now(self) -> PunchState:
         # before initialization ends, the punch rests on its excitation (setup position)
