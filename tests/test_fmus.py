@@ -216,3 +216,23 @@ def test_each_fmu_runs_from_its_file_alone_in_a_fresh_process(fmu_paths, tmp_pat
                      {"set": {"xi": xi}, "steps": 400, "h": 1e-3, "get": ["y"]})
     assert out["y"] == pytest.approx((-p.F10 + p.c3 * xi - p.m * GRAVITY) / (p.c1 + p.c3),
                                      abs=1e-12)
+
+
+def test_instances_in_one_process_are_independent(fmu_paths):
+    """Two punches with different springs, stepped interleaved, each end where a punch alone
+    ends: nothing is shared between instances."""
+    def punch(c3):
+        host = Host(fmu_paths["PunchContact"], f"punch_c3_{c3:g}")
+        host.set(c3=c3, xi=2e-3)
+        host.fmu.exitInitializationMode()
+        return host
+
+    a, b = punch(5e4), punch(2e5)
+    for k in range(300):
+        a.fmu.doStep(k * 1e-3, 1e-3)
+        b.fmu.doStep(k * 1e-3, 1e-3)
+    alone = punch(5e4)
+    for k in range(300):
+        alone.fmu.doStep(k * 1e-3, 1e-3)
+    assert a.get("y") == alone.get("y")
+    assert b.get("y") != a.get("y")
