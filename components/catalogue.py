@@ -4,4 +4,5 @@ FMUS: dict[str, tuple[str, str]] = {
     "MainShaft": ("shaft_fmu", "MainShaftSlave"),
     "PunchLinkage": ("punch_fmus", "PunchLinkageSlave"),
     "PunchContact": ("punch_fmus", "PunchContactSlave"),
+    "TakeupLinkage": ("takeup_fmu", "TakeupLinkageSlave"),
 }

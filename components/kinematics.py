@@ -162,3 +162,17 @@ def dyad_rrp(c: Motion, r: float, line_point: tuple[float, float], line_angle: f
     dvx, dvy = s_dot * ux - c.vx, s_dot * uy - c.vy
     s_ddot = (rodx * c.ax + rody * c.ay - (dvx * dvx + dvy * dvy)) / denom
     return Motion(x, y, s_dot * ux, s_dot * uy, s_ddot * ux, s_ddot * uy)
+
+
+def check_assembly(evaluate, mechanism: str, params, angle_name: str = "crank angle",
+                   samples: int = 3600) -> None:
+    """Evaluate a linkage over one crank turn (every 360/samples degrees); if it cannot be
+    assembled somewhere, raise AssemblyError naming the first crank angle and the parameters."""
+    crank = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
+    try:
+        evaluate(crank)
+    except AssemblyError as err:
+        deg = math.degrees(crank[err.index])
+        values = ", ".join(f"{k}={v:g}" for k, v in vars(params).items())
+        raise AssemblyError(f"{mechanism} cannot be assembled at {angle_name} = {deg:.1f}° "
+                            f"({err}); parameters: {values}") from None

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import RIGHT, AssemblyError, Motion, angle, dyad_rrp, dyad_rrr, link_angle, \
+from .kinematics import RIGHT, Motion, angle, check_assembly, dyad_rrp, dyad_rrr, link_angle, \
     point_on_link
 from .parameters import ANY, CHOICE, NONNEGATIVE, ParameterError, parameter, validate
 
@@ -67,7 +67,8 @@ class PunchLinkage:
         validate(params)
         self.p = params
         if params.mode == SIX_BAR:
-            self._check_assembly()
+            check_assembly(lambda alpha: self.slider(alpha, 0.0, 0.0), "punch six-bar", params,
+                           "crank angle alpha", _ASSEMBLY_SAMPLES)
             self.alpha0 = self._crank_angle_of_top()
             self.y_top = self.slider(self.alpha0, 0.0, 0.0).y
         else:
@@ -95,18 +96,6 @@ class PunchLinkage:
     def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
         """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
         return self.joints(alpha, alpha_rate, alpha_accel)["D"]
-
-    def _check_assembly(self) -> None:
-        alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
-        try:
-            self.slider(alpha, 0.0, 0.0)
-        except AssemblyError as err:
-            deg = math.degrees(alpha[err.index])
-            raise AssemblyError(f"punch six-bar cannot be assembled at crank angle alpha = "
-                                f"{deg:.1f}° ({err}); parameters: L_O1A={self.p.L_O1A}, "
-                                f"L_AB={self.p.L_AB}, L_O2B={self.p.L_O2B}, L_O2C={self.p.L_O2C}, "
-                                f"L_CD={self.p.L_CD}, O2=({self.p.x_O2}, {self.p.y_O2}), "
-                                f"x_D={self.p.x_D}") from None
 
     def _crank_angle_of_top(self) -> float:
         """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -."""

@@ -33,14 +33,27 @@ def cmd_list(args) -> None:
         import importlib
         doc = getattr(importlib.import_module(f"components.{module}"), slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
+    from .runner import STUDIES
+
     print("scenarios:")
     for name, path in sorted(catalogue().items()):
         print(f"  {name:18s} {load(str(path)).description}")
+    print("studies:")
+    for name, (text, _) in sorted(STUDIES.items()):
+        print(f"  {name:18s} {text}")
 
 
 def cmd_run(args) -> None:
-    from .runner import run_scenario
+    from .runner import STUDIES, run_scenario, run_study
 
+    if args.scenario in STUDIES:
+        if args.set:
+            raise ScenarioError(f"--set: the study {args.scenario} takes no settings")
+        out = Path(args.out) if args.out else Path("results") / args.scenario
+        summary = run_study(args.scenario, out, plot=args.plot)
+        print(f"{args.scenario}: results in {out}/")
+        print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
+        return
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
     summary = run_scenario(scenario, out, plot=args.plot)

@@ -15,12 +15,34 @@ import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
 
-from . import punch
+from . import punch, takeup
 from .format import Scenario, ScenarioError
 from .master import RunResult, run, stop_time
 
-# what each scenario's `analysis` key selects: key figures, plots, monolithic reference
-ANALYSES = {"punch": punch}
+# what each scenario's `analysis` key selects: key figures and plots
+ANALYSES = {"punch": punch, "takeup": takeup}
+
+
+def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
+    study = takeup.tolerance_study()
+    write_json(study, out_dir / "summary.json")
+    if plot:
+        takeup.plot_tolerance(study, out_dir / "takeup_tolerance.png")
+    return {"nominal_stroke_mm": study["nominal_stroke_mm"],
+            "stroke_change_per_mm_of_pin_adjustment":
+                study["stroke_change_per_mm_of_pin_adjustment"]}
+
+
+# studies: evaluations of a model over parameter sets, not co-simulations
+STUDIES = {
+    "takeup_tolerance": ("Thread take-up: E's path with link lengths off by ±0.1 mm, and the "
+                         "stroke against the eccentric-pin adjustment of L_CD (±1 mm)",
+                         _takeup_tolerance),
+}
+
+
+def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
+    return STUDIES[name][1](Path(out_dir), plot)
 
 
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:

@@ -11,6 +11,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+from components.catalogue import FMUS
 from components.punch_contact import GRAVITY, PunchContactParams
 from components.punch_linkage import PunchLinkage
 from tests.fmu_host import Host
@@ -19,7 +20,7 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def test_every_fmu_passes_fmpy_validate(fmu_paths):
-    assert set(fmu_paths) == {"MainShaft", "PunchLinkage", "PunchContact"}
+    assert set(fmu_paths) == set(FMUS)
     for name, path in fmu_paths.items():
         assert validate_fmu(str(path)) == [], name
 

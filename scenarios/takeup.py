@@ -1,0 +1,189 @@
+"""The thread take-up: key figures, plots, and the tolerance study of the eye's path.
+
+The paper (Qiu, Pan, Xu 2019) differentiated E's path numerically, by central differences with
+Δθ = 0.5°. The scenario `takeup` records E at exactly that crank-angle step, so the paper's
+velocity is the central difference of the recorded positions, and it is set beside the analytic
+velocity that the FMU outputs.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from components.parameters import with_values
+from components.kinematics import AssemblyError
+from components.takeup import TakeupLinkage, TakeupParams, path_stroke
+
+LINKS = ("L_AB", "L_BC", "L_CD", "L_BE")
+
+
+def _last_revolution(result, shaft="shaft"):
+    phi = result[f"{shaft}.phi"]
+    return phi >= phi[-1] - 2 * math.pi - 1e-12
+
+
+def central_difference(result, shaft="shaft", eye="takeup"):
+    """The paper's velocity of E from the recorded samples: dE/dθ by central differences, × ω.
+    NaN at the two ends, where a neighbour is missing."""
+    phi, omega = result[f"{shaft}.phi"], result[f"{shaft}.omega"]
+    out = []
+    for axis in ("z", "x"):
+        e = result[f"{eye}.E_{axis}"]
+        v = np.full_like(e, np.nan)
+        v[1:-1] = (e[2:] - e[:-2]) / (phi[2:] - phi[:-2]) * omega[1:-1]
+        out.append(v)
+    return out
+
+
+def summary_of_run(result, shaft="shaft", eye="takeup") -> dict:
+    last = _last_revolution(result, shaft)
+    ez, ex = result[f"{eye}.E_z"][last], result[f"{eye}.E_x"][last]
+    vz, vx = result[f"{eye}.E_vz"][last], result[f"{eye}.E_vx"][last]
+    az, ax = result[f"{eye}.E_az"][last], result[f"{eye}.E_ax"][last]
+    cd_z, cd_x = (v[last] for v in central_difference(result, shaft, eye))
+    speed = np.hypot(vz, vx)
+    cd_error = np.hypot(cd_z - vz, cd_x - vx)
+    d_theta = np.diff(result[f"{shaft}.phi"]).mean()
+    return {
+        "path_extent_z_mm": float(np.ptp(ez) * 1e3),
+        "path_extent_x_mm": float(np.ptp(ex) * 1e3),
+        "stroke_mm": path_stroke(ez, ex) * 1e3,
+        "peak_speed_m_s": float(speed.max()),
+        "peak_acceleration_m_s2": float(np.hypot(az, ax).max()),
+        "central_difference_step_deg": float(math.degrees(d_theta)),
+        "central_difference_max_error_m_s": float(np.nanmax(cd_error)),
+        "central_difference_max_error_percent_of_peak_speed":
+            float(np.nanmax(cd_error) / speed.max() * 100),
+    }
+
+
+def _model_of(result, eye="takeup") -> TakeupLinkage:
+    return TakeupLinkage(with_values(TakeupParams(), **result.scenario.instances[eye].parameters))
+
+
+def plot(curves, path, title: str) -> None:
+    """E's path with the linkage drawn at four crank angles; displacement, speed (analytic and
+    central-difference) and acceleration of E against the crank angle (last revolution)."""
+    import textwrap
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    (ax_path, ax_disp), (ax_speed, ax_acc) = axes
+    for label, result in curves:
+        last = _last_revolution(result)
+        deg = np.degrees(result["shaft.phi"][last] - result["shaft.phi"][last][0])
+        ez, ex = result["takeup.E_z"][last] * 1e3, result["takeup.E_x"][last] * 1e3
+        ax_path.plot(ez, ex, lw=2, label=f"E ({label})")
+        ax_disp.plot(deg, np.hypot(ez - ez[0], ex - ex[0]), label=label)
+        speed = np.hypot(result["takeup.E_vz"][last], result["takeup.E_vx"][last])
+        cd_z, cd_x = (v[last] for v in central_difference(result))
+        ax_speed.plot(deg, speed, label=f"analytic ({label})")
+        ax_speed.plot(deg, np.hypot(cd_z, cd_x), "--", label="central difference, Δθ = 0.5°")
+        err = ax_speed.twinx()
+        err.plot(deg, np.hypot(cd_z - result["takeup.E_vz"][last],
+                               cd_x - result["takeup.E_vx"][last]), color="C3", lw=0.8)
+        err.set_ylabel("|difference| [m/s]", color="C3")
+        ax_acc.plot(deg, np.hypot(result["takeup.E_az"][last], result["takeup.E_ax"][last]),
+                    label=label)
+        model = _model_of(result)
+        for theta, color in ((0.0, "C2"), (math.pi, "C4")):
+            m = model.motion(theta)
+            joints = [(0.0, 0.0), (m.B.x, m.B.y), (m.C.x, m.C.y), (model.p.z_D, model.p.x_D)]
+            coupler = [(m.B.x, m.B.y), (m.E.x, m.E.y), (m.C.x, m.C.y)]
+            for pts, style in ((joints, "o-"), (coupler, "--")):
+                zs, xs = zip(*[(a * 1e3, b * 1e3) for a, b in pts])
+                ax_path.plot(zs, xs, style, color=color, lw=1, ms=3)
+            ax_path.plot([], [], "-", color=color, lw=1,
+                         label=f"A-B-C-D and triangle BCE at θ = {math.degrees(theta):.0f}°")
+    ax_path.set_aspect("equal")
+    ax_path.set(xlabel="Z [mm]", ylabel="X [mm]", title="path of the take-up eye E")
+    ax_disp.set(xlabel="crank angle θ [°]", ylabel="displacement of E from θ = 0 [mm]")
+    ax_speed.set(xlabel="crank angle θ [°]", ylabel="speed of E [m/s]")
+    ax_acc.set(xlabel="crank angle θ [°]", ylabel="acceleration of E [m/s²]")
+    for ax in (ax_path, ax_disp, ax_speed, ax_acc):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    fig.suptitle("\n".join(textwrap.wrap(title, 90)), fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- the tolerance study --------------------------------------------------------------------------
+TOLERANCE = 0.1e-3            # ±0.1 mm on each link length
+PIN_ADJUSTMENT = np.linspace(-1.0e-3, 1.0e-3, 9)   # the eccentric pin changes L_CD by up to ±1 mm
+_THETA = np.radians(np.arange(0.0, 360.0, 0.5))
+
+
+def _path(params: TakeupParams):
+    e = TakeupLinkage(params).motion(_THETA).E
+    return e.x, e.y
+
+
+def tolerance_study() -> dict:
+    """E's path under link-length errors and under the eccentric-pin adjustment of L_CD."""
+    nominal = TakeupParams()
+    z0, x0 = _path(nominal)
+    stroke0 = path_stroke(z0, x0)
+    rows = []
+    for link in LINKS:
+        for sign in (-1, +1):
+            delta = sign * TOLERANCE
+            row = {"parameter": link, "change_mm": delta * 1e3}
+            try:
+                z, x = _path(with_values(nominal, **{link: getattr(nominal, link) + delta}))
+            except AssemblyError as err:
+                row["error"] = str(err)
+            else:
+                row["max_path_deviation_mm"] = float(np.hypot(z - z0, x - x0).max() * 1e3)
+                row["stroke_change_mm"] = (path_stroke(z, x) - stroke0) * 1e3
+            rows.append(row)
+    pin = []
+    for delta in PIN_ADJUSTMENT:
+        row = {"parameter": "L_CD (eccentric pin)", "change_mm": float(delta * 1e3)}
+        try:
+            z, x = _path(with_values(nominal, L_CD=nominal.L_CD + delta))
+        except AssemblyError as err:
+            row["error"] = str(err)
+        else:
+            row["stroke_mm"] = path_stroke(z, x) * 1e3
+            row["stroke_change_mm"] = row["stroke_mm"] - stroke0 * 1e3
+            row["max_path_deviation_mm"] = float(np.hypot(z - z0, x - x0).max() * 1e3)
+        pin.append(row)
+    ok = [r for r in pin if "stroke_mm" in r]
+    slope = float(np.polyfit([r["change_mm"] for r in ok], [r["stroke_mm"] for r in ok], 1)[0])
+    return {"nominal_stroke_mm": stroke0 * 1e3, "link_tolerance_mm": TOLERANCE * 1e3,
+            "links": rows, "pin_adjustment": pin,
+            "stroke_change_per_mm_of_pin_adjustment": slope}
+
+
+def plot_tolerance(study: dict, path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_path, ax_bar, ax_pin) = plt.subplots(1, 3, figsize=(15, 4.8))
+    nominal = TakeupParams()
+    for delta in (-1e-3, 0.0, 1e-3):
+        z, x = _path(with_values(nominal, L_CD=nominal.L_CD + delta))
+        ax_path.plot(z * 1e3, x * 1e3, label=f"L_CD {delta * 1e3:+.0f} mm")
+    ax_path.set(aspect="equal", xlabel="Z [mm]", ylabel="X [mm]",
+                title="E's path under the eccentric-pin adjustment")
+    ax_path.legend(fontsize=8)
+    labels = [f"{r['parameter']} {r['change_mm']:+.1f}" for r in study["links"]]
+    ax_bar.barh(labels, [r.get("max_path_deviation_mm", np.nan) for r in study["links"]])
+    ax_bar.set(xlabel="largest shift of E at equal crank angle [mm]",
+               title=f"link lengths off by ±{study['link_tolerance_mm']:.1f} mm")
+    ok = [r for r in study["pin_adjustment"] if "stroke_mm" in r]
+    ax_pin.plot([r["change_mm"] for r in ok], [r["stroke_mm"] for r in ok], "o-")
+    ax_pin.set(xlabel="eccentric-pin adjustment of L_CD [mm]", ylabel="stroke of E [mm]",
+               title=f"{study['stroke_change_per_mm_of_pin_adjustment']:+.2f} mm of stroke per mm")
+    for ax in (ax_path, ax_bar, ax_pin):
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
