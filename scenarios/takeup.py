@@ -104,9 +104,11 @@ def plot(curves, path, title: str) -> None:
     ax_disp.set(xlabel="crank angle θ [°]", ylabel="displacement of E from θ = 0 [mm]")
     ax_speed.set(xlabel="crank angle θ [°]", ylabel="speed of E [m/s]")
     ax_acc.set(xlabel="crank angle θ [°]", ylabel="acceleration of E [m/s²]")
-    for ax in (ax_path, ax_disp, ax_speed, ax_acc):
+    for ax in (ax_disp, ax_speed, ax_acc):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="best")
+    ax_path.grid(alpha=0.3)
+    ax_path.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.suptitle("\n".join(textwrap.wrap(title, 90)), fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
