@@ -5,4 +5,5 @@ FMUS: dict[str, tuple[str, str]] = {
     "PunchLinkage": ("punch_fmus", "PunchLinkageSlave"),
     "PunchContact": ("punch_fmus", "PunchContactSlave"),
     "TakeupLinkage": ("takeup_fmu", "TakeupLinkageSlave"),
+    "FeedLinkage": ("feed_fmu", "FeedLinkageSlave"),
 }

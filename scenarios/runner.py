@@ -15,12 +15,12 @@ import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
 
-from . import punch, takeup
+from . import feed, punch, takeup
 from .format import Scenario, ScenarioError
 from .master import RunResult, run, stop_time
 
 # what each scenario's `analysis` key selects: key figures and plots
-ANALYSES = {"punch": punch, "takeup": takeup}
+ANALYSES = {"punch": punch, "takeup": takeup, "feed": feed}
 
 
 def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
@@ -33,8 +33,24 @@ def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
                 study["stroke_change_per_mm_of_pin_adjustment"]}
 
 
+def _feed_ratio(out_dir: Path, plot: bool) -> dict:
+    study = feed.ratio_study()
+    summary = feed.summary_of_study(study)
+    write_json(summary, out_dir / "summary.json")
+    write_json(study, out_dir / "curves.json")
+    if plot:
+        feed.plot_study(study, out_dir / "feed_ratio.png")
+    amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
+                                                 if r["assembles"] else "cannot assemble")
+                                   for r in rows}
+    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(summary["lever_ratio"], "l5_over_l4"),
+            "phi5_amplitude_deg_by_l2_over_l8": amplitude(summary["rod_ratio"], "l2_over_l8")}
+
+
 # studies: evaluations of a model over parameter sets, not co-simulations
 STUDIES = {
+    "feed_ratio": ("Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and "
+                   "for the branches' rod-length ratio l2/l8 from 0.7 to 1.7", _feed_ratio),
     "takeup_tolerance": ("Thread take-up: E's path with link lengths off by ±0.1 mm, and the "
                          "stroke against the eccentric-pin adjustment of L_CD (±1 mm)",
                          _takeup_tolerance),

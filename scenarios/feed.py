@@ -1,0 +1,154 @@
+"""The feed mechanism: key figures, drawings, and the paper's lever-ratio study.
+
+Mansurova and Umarova study the swing of the feed-bar lever φ5(φ1) as the ratio l5/l4 changes
+(3.5 … 7.0, recommending 5.0 … 6.5) and as the ratio of the two branches' rod lengths changes
+(0.7 … 1.7). Here l4 is varied at fixed l5 for the first, and rod 2 (l2) at fixed rod 8 (l8) for
+the second, every other parameter at its default. A configuration that cannot be assembled is
+reported as such, with the crank angle where it fails, and the study goes on.
+"""
+from __future__ import annotations
+
+import math
+import textwrap
+
+import numpy as np
+
+from components.feed import FeedLinkage, FeedParams
+from components.kinematics import AssemblyError
+from components.parameters import with_values
+
+L5_L4_RATIOS = (3.5, 4.5, 5.5, 6.0, 6.5, 7.0)
+ROD_RATIOS = tuple(np.round(np.arange(0.7, 1.7001, 0.05), 2))
+_PHI1 = np.radians(np.arange(0.0, 360.0, 0.5))
+
+
+def _swing_deg(angles: np.ndarray) -> float:
+    return float(np.degrees(np.ptp(np.unwrap(angles))))
+
+
+def _last_revolution(result, shaft="shaft"):
+    phi = result[f"{shaft}.phi"]
+    return phi >= phi[-1] - 2 * math.pi - 1e-12
+
+
+def summary_of_run(result, shaft="shaft", feed="feed") -> dict:
+    last = _last_revolution(result, shaft)
+    col = lambda name: result[f"{feed}.{name}"][last]
+    return {
+        "phi3_swing_deg": _swing_deg(col("phi3")),
+        "phi5_swing_deg": _swing_deg(col("phi5")),
+        "phi7_swing_deg": _swing_deg(col("phi7")),
+        "M_path_width_mm": float(np.ptp(col("M_x")) * 1e3),
+        "M_path_height_mm": float(np.ptp(col("M_y")) * 1e3),
+        "min_transmission_angle_C_deg": float(np.degrees(col("mu_C").min())),
+        "min_transmission_angle_N_deg": float(np.degrees(col("mu_N").min())),
+        "min_transmission_angle_F_deg": float(np.degrees(col("mu_F").min())),
+    }
+
+
+def _draw(ax, model: FeedLinkage, phi1: float, color) -> None:
+    j = model.motion(phi1).joints
+    for chain in (("A", "B", "C", "D", "E", "F", "H", "G", "N", "K", "A"), ("H", "M")):
+        ax.plot([j[n].x * 1e3 for n in chain], [j[n].y * 1e3 for n in chain], "o-", color=color,
+                lw=1, ms=2.5)
+    ax.plot([], [], "-", color=color, label=f"φ1 = {math.degrees(phi1):.0f}°")
+
+
+def plot(curves, path, title: str) -> None:
+    """The mechanism at four crank angles with M's path; φ3, φ7, φ5 against φ1."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=(12, 8))
+    ax_mech = fig.add_subplot(1, 2, 1)
+    ax_zoom = fig.add_subplot(2, 2, 2)
+    ax_ang = fig.add_subplot(2, 2, 4)
+    for label, result in curves:
+        model = FeedLinkage(with_values(FeedParams(), **result.scenario.instances["feed"].parameters))
+        for k, phi1 in enumerate(np.radians([0, 90, 180, 270])):
+            _draw(ax_mech, model, phi1, f"C{k}")
+        last = _last_revolution(result)
+        mx, my = result["feed.M_x"][last] * 1e3, result["feed.M_y"][last] * 1e3
+        ax_mech.plot(mx, my, "k-", lw=2, label="path of M")
+        ax_zoom.plot(mx, my, "k-", lw=1.5)
+        for k, phi1 in enumerate(np.radians([0, 90, 180, 270])):
+            m = model.motion(phi1).joints["M"]
+            ax_zoom.plot(m.x * 1e3, m.y * 1e3, "o", color=f"C{k}")
+        deg = np.degrees(result["shaft.phi"][last] - result["shaft.phi"][last][0])
+        for name in ("phi3", "phi7", "phi5"):
+            values = np.degrees(np.unwrap(result[f"feed.{name}"][last]))
+            ax_ang.plot(deg, values - values.mean(), label=f"{name} − {values.mean():.1f}°")
+    ax_mech.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title="mechanism and M's path")
+    ax_zoom.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title="feed-dog path of M")
+    ax_ang.set(xlabel="crank angle φ1 [°]", ylabel="angle about its mean [°]")
+    for ax in (ax_mech, ax_zoom, ax_ang):
+        ax.grid(alpha=0.3)
+    ax_mech.legend(fontsize=8, loc="upper right")
+    ax_ang.legend(fontsize=8)
+    fig.suptitle("\n".join(textwrap.wrap(title, 90)), fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- the lever-ratio study -----------------------------------------------------------------------
+def _case(params: FeedParams, **changes) -> dict:
+    try:
+        motion = FeedLinkage(with_values(params, **changes)).motion(_PHI1)
+    except AssemblyError as err:
+        return {"assembles": False, "error": str(err)}
+    phi5 = np.degrees(np.unwrap(motion.phi5.value))
+    return {"assembles": True, "phi5_amplitude_deg": float(np.ptp(phi5)),
+            "phi5_deg": phi5.round(6).tolist()}
+
+
+def ratio_study() -> dict:
+    base = FeedParams()
+    lever = []
+    for ratio in L5_L4_RATIOS:
+        case = _case(base, l4=base.l5 / ratio)
+        lever.append({"l5_over_l4": ratio, "l4_mm": base.l5 / ratio * 1e3, **case})
+    rods = []
+    for ratio in ROD_RATIOS:
+        case = _case(base, l2=base.l8 * float(ratio))
+        rods.append({"l2_over_l8": float(ratio), "l2_mm": base.l8 * float(ratio) * 1e3, **case})
+    return {"phi1_deg": np.degrees(_PHI1).tolist(), "lever_ratio": lever, "rod_ratio": rods}
+
+
+def summary_of_study(study: dict) -> dict:
+    """The study without the curves: one line per configuration."""
+    strip = lambda rows: [{k: v for k, v in r.items() if k != "phi5_deg"} for r in rows]
+    return {"lever_ratio": strip(study["lever_ratio"]), "rod_ratio": strip(study["rod_ratio"])}
+
+
+def plot_study(study: dict, path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_curves, ax_lever, ax_rods) = plt.subplots(1, 3, figsize=(15, 4.8))
+    for row in study["lever_ratio"]:
+        if row["assembles"]:
+            phi5 = np.asarray(row["phi5_deg"])
+            ax_curves.plot(study["phi1_deg"], phi5 - phi5.mean(), label=f"l5/l4 = {row['l5_over_l4']}")
+    ax_curves.set(xlabel="crank angle φ1 [°]", ylabel="φ5 about its mean [°]",
+                  title="feed-bar lever swing φ5(φ1) (cf. the paper's fig. 2b)")
+    ax_curves.legend(fontsize=8)
+    for ax, key, rows, label in ((ax_lever, "l5_over_l4", study["lever_ratio"], "l5 / l4"),
+                                 (ax_rods, "l2_over_l8", study["rod_ratio"], "l2 / l8 (rod 2 / rod 8)")):
+        ok = [r for r in rows if r["assembles"]]
+        bad = [r for r in rows if not r["assembles"]]
+        ax.plot([r[key] for r in ok], [r["phi5_amplitude_deg"] for r in ok], "o-")
+        if bad:
+            ax.plot([r[key] for r in bad], [0.0] * len(bad), "rx", ms=8, label="cannot assemble")
+            ax.legend(fontsize=8)
+        ax.set(xlabel=label, ylabel="amplitude (swing) of φ5 [°]")
+    ax_lever.axvspan(5.0, 6.5, color="C2", alpha=0.15)
+    ax_lever.set_title("recommended 5.0 … 6.5 shaded")
+    ax_rods.set_title("branch rod-length ratio")
+    for ax in (ax_curves, ax_lever, ax_rods):
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
