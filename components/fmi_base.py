@@ -79,8 +79,8 @@ class SewSlave(Fmi2Slave):
     outputs: Sequence[Port] = ()
     calculated: Sequence[Port] = ()
     model_name = ""                # the FMU's modelName / modelIdentifier
-    # input triples (value, its rate, its acceleration) extrapolated inside a step by Taylor
-    taylor_inputs: Sequence[tuple[str, str, str]] = ()
+    # input chains (value, its rate[, its acceleration]) extrapolated inside a step by Taylor
+    taylor_inputs: Sequence[tuple[str, ...]] = ()
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -172,13 +172,18 @@ class SewSlave(Fmi2Slave):
         raise FmuError(message)
 
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
-        """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs`
-        triple (x, x', x'') by its Taylor polynomial, any other input held."""
+        """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs` chain
+        (x, x', x'', ...) by its Taylor polynomial (the last derivative held), others held."""
         u = dict(self._inputs)
-        for value, rate, accel in type(self).taylor_inputs:
-            x, dx, ddx = u[value], u[rate], u[accel]
-            u[value] = x + dt * (dx + 0.5 * dt * ddx)
-            u[rate] = dx + dt * ddx
+        for chain in type(self).taylor_inputs:
+            values = [u[name] for name in chain]
+            for k, name in enumerate(chain[:-1]):
+                total, term = 0.0, 1.0
+                for j, x in enumerate(values[k:]):
+                    if j:
+                        term *= dt / j
+                    total += x * term
+                u[name] = total
         return u
 
     def _check_inputs(self) -> None:

@@ -17,10 +17,10 @@ exact solution. No step size limit follows from stability, only from the extrapo
 """
 from __future__ import annotations
 
-import cmath
 import math
 from dataclasses import dataclass
 
+from .oscillator import DampedOscillator
 from .parameters import CHOICE, NONNEGATIVE, parameter, validate
 
 GRAVITY = 9.81
@@ -74,49 +74,6 @@ class PunchOutputs:
 
 class ZenoError(RuntimeError):
     """Too many contact switches in one step (chattering that the model cannot resolve)."""
-
-
-class _Piece:
-    """Exact solution of m·y'' + b·y' + c·y = f0 + f1·τ + f2·τ² from (y0, v0) at τ = 0."""
-
-    __slots__ = ("m", "b", "c", "f0", "f1", "f2", "p0", "p1", "p2", "l1", "l2", "k1", "k2",
-                 "critical")
-
-    def __init__(self, m, b, c, f0, f1, f2, y0, v0):
-        self.m, self.b, self.c, self.f0, self.f1, self.f2 = m, b, c, f0, f1, f2
-        # particular solution: a quadratic in τ
-        self.p2 = f2 / c
-        self.p1 = (f1 - 2.0 * b * self.p2) / c
-        self.p0 = (f0 - b * self.p1 - 2.0 * m * self.p2) / c
-        e0 = y0 - self.p0
-        de0 = v0 - self.p1
-        disc = b * b - 4.0 * m * c
-        root = cmath.sqrt(disc)
-        self.l1 = (-b + root) / (2.0 * m)
-        self.l2 = (-b - root) / (2.0 * m)
-        self.critical = abs(disc) <= 1e-12 * (b * b + 4.0 * m * c)
-        if self.critical:           # repeated root: (k1 + k2·τ)·exp(l1·τ)
-            self.l1 = self.l2 = -b / (2.0 * m)
-            self.k1, self.k2 = e0, de0 - self.l1 * e0
-        else:
-            self.k2 = (de0 - self.l1 * e0) / (self.l2 - self.l1)
-            self.k1 = e0 - self.k2
-
-    def state(self, tau: float) -> tuple[float, float]:
-        """(y, y') at τ."""
-        py = self.p0 + tau * (self.p1 + tau * self.p2)
-        pv = self.p1 + 2.0 * tau * self.p2
-        if self.critical:
-            ex = math.exp(self.l1.real * tau)
-            e = (self.k1 + self.k2 * tau) * ex
-            de = (self.k2 + self.l1.real * (self.k1 + self.k2 * tau)) * ex
-            return py + e, pv + de
-        x1 = self.k1 * cmath.exp(self.l1 * tau)
-        x2 = self.k2 * cmath.exp(self.l2 * tau)
-        return py + (x1 + x2).real, pv + (self.l1 * x1 + self.l2 * x2).real
-
-    def accel(self, tau: float, y: float, v: float) -> float:
-        return (self.f0 + tau * (self.f1 + tau * self.f2) - self.b * v - self.c * y) / self.m
 
 
 class PunchContact:
@@ -196,7 +153,7 @@ class PunchContact:
         raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP} contact switches within one step of "
                         f"{h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
 
-    def _largest_F2(self, piece: _Piece, length: float) -> float:
+    def _largest_F2(self, piece: DampedOscillator, length: float) -> float:
         """Largest fabric force -(c2·y + b2·y') on a contact piece of the given length."""
         c2, b2 = self.p.c2, self.p.b2
 
@@ -220,7 +177,7 @@ class PunchContact:
             best = max(best, force(0.5 * (lo + hi)))
         return max(best, 0.0)
 
-    def _piece(self, y, v, contact, spring_on, x0, x1, x2, t0) -> _Piece:
+    def _piece(self, y, v, contact, spring_on, x0, x1, x2, t0) -> DampedOscillator:
         """The exact solution from time t0 of the step, in the current contact/spring mode."""
         p = self.p
         b, c = p.b1, p.c1
@@ -238,7 +195,7 @@ class PunchContact:
             f0 += p.F30 + p.c3 * a0 + p.b3 * a1
             f1 += p.c3 * a1 + 2.0 * p.b3 * a2
             f2 += p.c3 * a2
-        return _Piece(p.m, b, c, f0, f1, f2, y, v)
+        return DampedOscillator(p.m, b, c, f0, f1, f2, y, v)
 
     def _switch_functions(self, piece, tau, contact, spring_on, x0, x1, x2, t_abs):
         """Switching functions at piece time tau, signed so that > 0 means 'flip this flag'."""
