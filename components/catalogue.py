@@ -6,4 +6,6 @@ FMUS: dict[str, tuple[str, str]] = {
     "PunchContact": ("punch_fmus", "PunchContactSlave"),
     "TakeupLinkage": ("takeup_fmu", "TakeupLinkageSlave"),
     "FeedLinkage": ("feed_fmu", "FeedLinkageSlave"),
+    "CarriageDrive": ("carriage_fmus", "CarriageDriveSlave"),
+    "CarriageModal": ("carriage_fmus", "CarriageModalSlave"),
 }

@@ -15,12 +15,12 @@ import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
 
-from . import feed, punch, takeup
+from . import carriage, feed, punch, takeup
 from .format import Scenario, ScenarioError
 from .master import RunResult, run, stop_time
 
 # what each scenario's `analysis` key selects: key figures and plots
-ANALYSES = {"punch": punch, "takeup": takeup, "feed": feed}
+ANALYSES = {"punch": punch, "takeup": takeup, "feed": feed, "carriage": carriage}
 
 
 def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
@@ -47,8 +47,20 @@ def _feed_ratio(out_dir: Path, plot: bool) -> dict:
             "phi5_amplitude_deg_by_l2_over_l8": amplitude(summary["rod_ratio"], "l2_over_l8")}
 
 
+def _carriage_resonance(out_dir: Path, plot: bool) -> dict:
+    study = carriage.resonance_study()
+    write_json(study, out_dir / "summary.json")
+    if plot:
+        carriage.plot_resonance(study, out_dir / "carriage_resonance.png")
+    return {key: study[key] for key in ("omega1", "omega2", "resonant_stitch_rate",
+                                        "peak_abs_U2_at_1600_um")}
+
+
 # studies: evaluations of a model over parameter sets, not co-simulations
 STUDIES = {
+    "carriage_resonance": ("Carriage: steady-state peak tip deflection |U2| for 600 to 2000 "
+                           "stitches/min, the paper's carriage and its two remedies",
+                           _carriage_resonance),
     "feed_ratio": ("Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and "
                    "for the branches' rod-length ratio l2/l8 from 0.7 to 1.7", _feed_ratio),
     "takeup_tolerance": ("Thread take-up: E's path with link lengths off by ±0.1 mm, and the "

@@ -1,0 +1,156 @@
+"""The carriage of the coordinate device: start-stop response, and the resonance study.
+
+The resonance study needs the steady state at 71 stitch rates for three designs. Rather than
+co-simulating each rate until the transient has died out (seconds of simulated time each), it
+computes the periodic steady state directly: the exact one-stitch map of each mode (the same
+exact discretization as the FMU, for an acceleration linear over each step) gives the initial
+state that repeats itself after one stitch. The test suite checks this against the FMU
+co-simulation of carriage_startstop and against a frequency-domain (harmonic) solution.
+"""
+from __future__ import annotations
+
+import math
+import textwrap
+
+import numpy as np
+
+from components.carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
+from components.oscillator import DampedOscillator
+from components.parameters import with_values
+
+RATES = np.arange(600.0, 2000.0 + 1e-9, 20.0)          # stitches/min
+MACHINE_RATE = 1600.0
+STEPS_PER_STITCH = 360
+DESIGNS = {
+    "paper's carriage": {},
+    "traverse twice as stiff (EJ × 2)": {"EJ": 2 * 2604.0},
+    "shorter cantilever (l = 0.415 m)": {"l": 0.415},
+}
+
+
+def _last_stitch(result, shaft="shaft"):
+    phi = result[f"{shaft}.phi"]
+    return phi >= phi[-1] - 2 * math.pi - 1e-12
+
+
+def _models(result, carriage="carriage", drive="drive"):
+    inst = result.scenario.instances
+    return (CarriageModal(with_values(CarriageParams(), **inst[carriage].parameters)),
+            CarriageDrive(with_values(CarriageDriveParams(), **inst[drive].parameters)))
+
+
+def summary_of_run(result, shaft="shaft", carriage="carriage") -> dict:
+    model, _ = _models(result)
+    last = _last_stitch(result, shaft)
+    omega = float(result[f"{shaft}.omega"][-1])
+    return {"omega1": float(model.omega[0]), "omega2": float(model.omega[1]),
+            "stitch_rate_per_min": omega * 60 / (2 * math.pi),
+            "peak_abs_U2_last_stitch_um": float(np.abs(result[f"{carriage}.U2"][last]).max() * 1e6),
+            "peak_abs_U2_um": float(np.abs(result[f"{carriage}.U2"]).max() * 1e6)}
+
+
+def plot(curves, path, title: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_x, ax_a, ax_u) = plt.subplots(3, 1, sharex=True, figsize=(10, 8))
+    for label, result in curves:
+        t = result.time
+        last = t >= t[-1] - 5 * 60 / summary_of_run(result)["stitch_rate_per_min"]
+        ax_x.plot(t[last], result["drive.x"][last] * 1e3)
+        ax_a.plot(t[last], result["drive.a"][last])
+        ax_u.plot(t[last], result["carriage.U2"][last] * 1e6, label="U2 (tip, at B)")
+        ax_u.plot(t[last], result["carriage.U1"][last] * 1e6, label="U1 (at A)")
+    ax_x.set_ylabel("table position x [mm]")
+    ax_a.set_ylabel("table acceleration [m/s²]")
+    ax_u.set_ylabel("deflection [µm]")
+    ax_u.set_xlabel("time [s] (the last five stitches)")
+    ax_u.legend(fontsize=8)
+    for ax in (ax_x, ax_a, ax_u):
+        ax.grid(alpha=0.3)
+    fig.suptitle("\n".join(textwrap.wrap(title, 90)), fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- periodic steady state ------------------------------------------------------------------------
+def _step_maps(model: CarriageModal, h: float):
+    """Per mode: the exact one-step map x' = Φ·x + g0·a0 + g1·a1 for a(τ) = a0 + a1·τ."""
+    maps = []
+    for i in range(2):
+        w, g = model.omega[i], -model.modal_load[i]
+        b, c = 2 * model.p.zeta * w, w * w
+        cols = [DampedOscillator(1.0, b, c, 0.0, 0.0, 0.0, *x0).state(h)
+                for x0 in ((1.0, 0.0), (0.0, 1.0))]
+        phi = np.array(cols).T
+        g0 = np.array(DampedOscillator(1.0, b, c, g, 0.0, 0.0, 0.0, 0.0).state(h))
+        g1 = np.array(DampedOscillator(1.0, b, c, 0.0, g, 0.0, 0.0, 0.0).state(h))
+        maps.append((phi, g0, g1))
+    return maps
+
+
+def periodic_response(model: CarriageModal, drive: CarriageDrive, rate_per_min: float,
+                      steps: int = STEPS_PER_STITCH):
+    """Steady-state U over one stitch (time, U of shape (2, steps + 1)) at a constant rate."""
+    omega = rate_per_min * 2 * math.pi / 60
+    period = 2 * math.pi / omega
+    h = period / steps
+    t = np.arange(steps + 1) * h
+    _, _, acc, jerk = drive.motion(omega * t, omega, 0.0)
+    q = np.zeros((2, 2, steps + 1))            # mode, (q, q'), time
+    for i, (phi, g0, g1) in enumerate(_step_maps(model, h)):
+        # the forced part over one stitch from rest, then the initial state that repeats
+        x = np.zeros(2)
+        forced = np.empty((2, steps + 1))
+        forced[:, 0] = x
+        for k in range(steps):
+            x = phi @ x + g0 * acc[k] + g1 * jerk[k]
+            forced[:, k + 1] = x
+        x0 = np.linalg.solve(np.eye(2) - np.linalg.matrix_power(phi, steps), forced[:, -1])
+        free = x0.copy()
+        for k in range(steps + 1):
+            q[i, :, k] = forced[:, k] + free
+            free = phi @ free
+    return t, model.modes @ q[:, 0, :]
+
+
+def resonance_study() -> dict:
+    drive = CarriageDrive()
+    curves = {}
+    for name, changes in DESIGNS.items():
+        model = CarriageModal(with_values(CarriageParams(), **changes))
+        peaks = [float(np.abs(periodic_response(model, drive, n)[1][1]).max()) for n in RATES]
+        k = int(np.argmax(peaks))
+        curves[name] = {"parameters": changes, "omega1": float(model.omega[0]),
+                        "omega2": float(model.omega[1]),
+                        "first_resonance_stitch_rate": float(model.omega[0] * 60 / (2 * math.pi)),
+                        "resonant_stitch_rate": float(RATES[k]),
+                        "peak_abs_U2_at_1600_um": peaks[int(np.argmin(abs(RATES - MACHINE_RATE)))] * 1e6,
+                        "peak_abs_U2_um": [p * 1e6 for p in peaks]}
+    base = curves["paper's carriage"]
+    return {"omega1": base["omega1"], "omega2": base["omega2"],
+            "resonant_stitch_rate": base["resonant_stitch_rate"],
+            "peak_abs_U2_at_1600_um": base["peak_abs_U2_at_1600_um"],
+            "stitch_rates_per_min": RATES.tolist(), "designs": curves}
+
+
+def plot_resonance(study: dict, path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 5))
+    for name, curve in study["designs"].items():
+        ax.plot(study["stitch_rates_per_min"], curve["peak_abs_U2_um"], "o-", ms=3,
+                label=f"{name}: ω1 = {curve['omega1']:.0f} rad/s")
+    ax.axvline(MACHINE_RATE, color="k", ls="--", lw=1)
+    ax.text(MACHINE_RATE, ax.get_ylim()[1] * 0.95, " the machine: 1600 /min", fontsize=9)
+    ax.set(xlabel="stitch rate [stitches/min]", ylabel="steady-state peak |U2| [µm]",
+           title="Resonance of the carriage under start-stop stitches")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,161 @@
+"""The carriage's 2-DOF Ritz model against closed forms, a finite-element beam, scipy, a
+frequency-domain solution, and the FMU co-simulation."""
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.linalg import eigh
+
+from components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
+from scenarios.carriage import periodic_response, resonance_study
+from scenarios.format import load
+from scenarios.master import run
+from scenarios.runner import summarize
+
+
+def test_stiffness_is_the_inverse_flexibility_in_closed_form():
+    p = CarriageParams()
+    a, l, EJ = p.a, p.l, p.EJ
+    common = EJ / ((l - a) ** 2 * (4 * l - a))
+    closed = np.array([[12 * l ** 3 / a ** 3, -6 * (3 * l - a) / a],
+                       [-6 * (3 * l - a) / a, 12.0]]) * common
+    model = CarriageModal(p)
+    assert np.allclose(model.K, closed, rtol=1e-12)
+    # and the strain energy of the Ritz shapes gives the same matrix
+    assert np.allclose(model.energy_stiffness(), closed, rtol=1e-10)
+    assert np.allclose(flexibility(p) @ model.K, np.eye(2), atol=1e-12)
+
+
+def _fe_frequencies(p: CarriageParams, n_elements: int = 60):
+    """Euler-Bernoulli beam, Hermite cubic elements, clamped at 0, with the carriage (m_k at B,
+    J_c through the tilt (w_B - w_A)/(l - a)) attached at the nodes A and B."""
+    n_a = round(n_elements * p.a / p.l)
+    nodes = np.concatenate([np.linspace(0, p.a, n_a + 1), np.linspace(p.a, p.l,
+                                                                     n_elements - n_a + 1)[1:]])
+    ndof = 2 * len(nodes)
+    K, M = np.zeros((ndof, ndof)), np.zeros((ndof, ndof))
+    rho = p.m_n / p.l
+    for e in range(len(nodes) - 1):
+        L = nodes[e + 1] - nodes[e]
+        k = p.EJ / L ** 3 * np.array([[12, 6 * L, -12, 6 * L], [6 * L, 4 * L * L, -6 * L, 2 * L * L],
+                                      [-12, -6 * L, 12, -6 * L], [6 * L, 2 * L * L, -6 * L, 4 * L * L]])
+        m = rho * L / 420 * np.array([[156, 22 * L, 54, -13 * L], [22 * L, 4 * L * L, 13 * L, -3 * L * L],
+                                      [54, 13 * L, 156, -22 * L], [-13 * L, -3 * L * L, -22 * L, 4 * L * L]])
+        idx = slice(2 * e, 2 * e + 4)
+        K[idx, idx] += k
+        M[idx, idx] += m
+    wa, wb = 2 * n_a, 2 * (len(nodes) - 1)
+    M[wb, wb] += p.m_k
+    tilt = np.zeros(ndof)
+    tilt[wb], tilt[wa] = 1 / (p.l - p.a), -1 / (p.l - p.a)
+    M += p.J_c * np.outer(tilt, tilt)
+    free = slice(2, ndof)                       # clamped: w(0) = w'(0) = 0
+    lam = eigh(K[free, free], M[free, free], eigvals_only=True)
+    return np.sqrt(lam[:2])
+
+
+def test_frequencies_bound_a_finite_element_beam_from_above():
+    p = CarriageParams()
+    ritz = CarriageModal(p).omega
+    fe = _fe_frequencies(p)
+    assert np.all(ritz >= fe * (1 - 1e-9))       # Rayleigh-Ritz: an upper bound
+    assert ritz[0] == pytest.approx(fe[0], rel=0.02)
+    assert ritz[1] == pytest.approx(fe[1], rel=0.05)
+
+
+def test_paper_frequencies_are_not_the_models():
+    """The paper's ω1 = 180.2 rad/s appears only with the mass matrix halved."""
+    model = CarriageModal()
+    assert model.omega[0] == pytest.approx(127.24, abs=0.01)
+    halved = np.sqrt(eigh(model.K, model.M / 2, eigvals_only=True))
+    assert halved[0] == pytest.approx(180.2, rel=0.005)
+    assert abs(halved[1] - 6184) > 1000 and abs(model.omega[1] - 6184) > 1000
+
+
+def test_load_vector_is_not_M_times_ones():
+    model = CarriageModal()
+    assert not np.allclose(model.load, model.M @ [1.0, 1.0], rtol=1e-3)
+    assert model.load[1] > model.p.m_k                   # the carriage plus part of the beam
+
+
+def test_static_response_to_a_constant_base_acceleration():
+    model = CarriageModal()
+    q, dq = np.zeros(2), np.zeros(2)
+    for _ in range(5000):                                # 10 s: the transient dies out (e^-25)
+        q, dq = model.step(q, dq, 5.0, 0.0, 2e-3)
+    U, _ = model.physical(q, dq)
+    assert np.allclose(U, -np.linalg.solve(model.K, model.load) * 5.0, rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("h", [4e-3, 1e-4])
+def test_exact_integrator_matches_scipy_at_coarse_and_fine_steps(h):
+    """Physical coordinates, damping C = M·Φ·diag(2ζω)·Φᵀ·M, the same piecewise-linear input."""
+    model = CarriageModal()
+    phi, w, z = model.modes, model.omega, model.p.zeta
+    C = model.M @ phi @ np.diag(2 * z * w) @ phi.T @ model.M
+    drive = CarriageDrive()
+    omega = 1500 * 2 * math.pi / 60
+    n = round(0.12 / h)
+    knots = np.arange(n + 1) * h
+    t_end = knots[-1]
+    _, _, a_knots, jerk_knots = drive.motion(omega * knots, omega, 0.0)
+
+    def a_of(t):                                     # the input the exact method assumes
+        k = min(int(t / h), n - 1)
+        return a_knots[k] + jerk_knots[k] * (t - knots[k])
+
+    minv = np.linalg.inv(model.M)
+
+    def rhs(t, s):
+        u, du = s[:2], s[2:]
+        return np.concatenate([du, minv @ (-model.K @ u - C @ du - model.load * a_of(t))])
+
+    ref = solve_ivp(rhs, (0, t_end), np.zeros(4), method="DOP853", rtol=1e-11, atol=1e-15,
+                    max_step=h / 4, t_eval=knots)
+    q, dq = np.zeros(2), np.zeros(2)
+    U = [np.zeros(2)]
+    for k in range(n):
+        q, dq = model.step(q, dq, a_knots[k], jerk_knots[k], h)
+        U.append(model.physical(q, dq)[0])
+    U = np.array(U).T
+    scale = np.abs(ref.y[1]).max()
+    assert np.max(np.abs(U - ref.y[:2])) < 1e-7 * scale
+
+
+def test_periodic_steady_state_matches_a_frequency_domain_solution():
+    model, drive = CarriageModal(), CarriageDrive()
+    rate = 1400.0
+    _, U = periodic_response(model, drive, rate)
+    omega = rate * 2 * math.pi / 60
+    N = 4096
+    t = np.arange(N) * (2 * math.pi / omega) / N
+    _, _, acc, _ = drive.motion(omega * t, omega, 0.0)
+    A = np.fft.rfft(acc)
+    k = np.arange(len(A))
+    resp = np.zeros((2, len(A)), dtype=complex)
+    for i in range(2):
+        wi = model.omega[i]
+        H = -model.modal_load[i] / (wi ** 2 - (k * omega) ** 2 + 2j * model.p.zeta * wi * k * omega)
+        resp += np.outer(model.modes[:, i], H * A)
+    U2 = np.fft.irfft(resp[1], n=N)
+    assert np.abs(U[1]).max() == pytest.approx(np.abs(U2).max(), rel=2e-3)
+
+
+def test_co_simulation_reaches_the_periodic_steady_state(fmu_paths):
+    fig = summarize(run(load("carriage_startstop"), fmu_paths))
+    model, drive = CarriageModal(), CarriageDrive()
+    _, U = periodic_response(model, drive, 1600.0)
+    assert fig["omega1"] == pytest.approx(model.omega[0])
+    assert fig["peak_abs_U2_last_stitch_um"] == pytest.approx(np.abs(U[1]).max() * 1e6, rel=0.01)
+
+
+def test_resonance_study():
+    study = resonance_study()
+    rates = np.array(study["stitch_rates_per_min"])
+    assert rates[0] == 600 and rates[-1] == 2000 and np.all(np.diff(rates) <= 20)
+    # the largest response where the stitch rate meets the first natural frequency
+    assert study["resonant_stitch_rate"] == pytest.approx(60 * study["omega1"] / (2 * math.pi),
+                                                          abs=20)
+    stiff = study["designs"]["traverse twice as stiff (EJ × 2)"]
+    assert stiff["omega1"] == pytest.approx(study["omega1"] * math.sqrt(2), rel=1e-9)
