@@ -11,12 +11,12 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
-import re
 import shutil
 import sys
 import tempfile
 import zipfile
 from pathlib import Path
+from xml.etree import ElementTree
 
 from .catalogue import FMUS
 
@@ -71,11 +71,10 @@ def fmu_version(fmu_path: Path) -> str | None:
     """The version attribute of an FMU's modelDescription, or None if unreadable."""
     try:
         with zipfile.ZipFile(fmu_path) as zf:
-            head = zf.read("modelDescription.xml")[:4000].decode("utf-8", "replace")
-    except (OSError, KeyError, zipfile.BadZipFile):
+            root = ElementTree.fromstring(zf.read("modelDescription.xml"))
+    except (OSError, KeyError, zipfile.BadZipFile, ElementTree.ParseError):
         return None
-    match = re.search(r'\sversion="([^"]*)"', head)
-    return match.group(1) if match else None
+    return root.get("version")
 
 
 def current_version() -> str:

@@ -23,7 +23,7 @@ its inputs, outputs and calculated parameters; it implements `build_model`, `ini
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 from xml.etree.ElementTree import Element, SubElement
 
@@ -95,6 +95,10 @@ class SewSlave(Fmi2Slave):
         self._model = None
         self._cache: dict[str, Any] | None = None
         self._register_all()
+        # value reference -> getter / setter, for the batched calls of every step
+        self._real_get = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, Real)}
+        self._real_set = {vr: v.setter for vr, v in self.vars.items()
+                          if isinstance(v, Real) and v.setter is not None}
 
     # --- declaration ---------------------------------------------------------------------------
     def _register_all(self) -> None:
@@ -192,6 +196,24 @@ class SewSlave(Fmi2Slave):
                 self._fail(f"input {name} is {value} at t = {self._time:g} s; refusing to step")
 
     # --- FMI calls -----------------------------------------------------------------------------
+    # pythonfmu's get_real/set_real check every variable's type on every call; these look the
+    # getter up directly (the hot path of a co-simulation step)
+    def get_real(self, vrs):
+        try:
+            getters = [self._real_get[vr] for vr in vrs]
+        except KeyError as err:
+            raise TypeError(f"variable with valueReference={err.args[0]} is not a Real") from None
+        return [float(get()) for get in getters]
+
+    def set_real(self, vrs, values):
+        try:
+            setters = [self._real_set[vr] for vr in vrs]
+        except KeyError as err:
+            raise TypeError(f"variable with valueReference={err.args[0]} is not a settable "
+                            f"Real") from None
+        for set_value, value in zip(setters, values):
+            set_value(value)
+
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._time = float(start_time)
 
@@ -298,5 +320,5 @@ class SewSlave(Fmi2Slave):
 
 
 def fields_of(obj) -> dict[str, Any]:
-    """A frozen dataclass as a plain dict (for saving internal state)."""
-    return {f.name: getattr(obj, f.name) for f in fields(obj)}
+    """A (frozen) dataclass instance as a plain dict: outputs, or internal state to save."""
+    return dict(vars(obj))

@@ -65,6 +65,8 @@ class Angle:
 
 def _scalar_or_array(x):
     """Plain float for a scalar (fast math path), float array otherwise."""
+    if isinstance(x, (float, int)):
+        return float(x)
     arr = np.asarray(x, dtype=float)
     return float(arr) if arr.ndim == 0 else arr
 
@@ -98,12 +100,14 @@ def link_angle(start: Motion, end: Motion) -> Angle:
     return Angle(_atan2(ry, rx), (rx * vy - ry * vx) / r2, (rx * ay - ry * ax) / r2)
 
 
-def _raise_first(bad, message: str):
-    bad = np.asarray(bad)
-    if bad.any():
-        err = AssemblyError(message)
-        err.index = int(np.flatnonzero(np.ravel(bad))[0]) if bad.ndim else 0
-        raise err
+def _require(ok, message: str):
+    """Raise AssemblyError unless `ok` holds everywhere; `.index` is the first failing sample."""
+    if ok if isinstance(ok, (bool, np.bool_)) else np.all(ok):
+        return
+    err = AssemblyError(message)
+    bad = np.logical_not(ok)
+    err.index = int(np.flatnonzero(np.ravel(bad))[0]) if np.ndim(bad) else 0
+    raise err
 
 
 def dyad_rrr(p: Motion, r_p: float, q: Motion, r_q: float, side: int, name: str = "dyad") -> Motion:
@@ -114,13 +118,12 @@ def dyad_rrr(p: Motion, r_p: float, q: Motion, r_q: float, side: int, name: str 
     """
     dx, dy = q.x - p.x, q.y - p.y
     d2 = dx * dx + dy * dy
-    _raise_first(np.logical_not(d2 > 0.0), f"{name}: the two pivots coincide")
+    _require(d2 > 0.0, f"{name}: the two pivots coincide")
     d = _sqrt(d2)
     # distance from P, along P->Q, to the chord through the two intersection points
     along = (d2 + r_p * r_p - r_q * r_q) / (2.0 * d)
     h2 = r_p * r_p - along * along
-    _raise_first(np.logical_not(h2 >= 0.0),
-                 f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
+    _require(h2 >= 0.0, f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
     ex, ey = dx / d, dy / d
     hh = side * _sqrt(h2)
     x, y = p.x + along * ex - hh * ey, p.y + along * ey + hh * ex
@@ -153,7 +156,7 @@ def dyad_rrp(c: Motion, r: float, line_point: tuple[float, float], line_angle: f
     along = relx * ux + rely * uy
     off = ux * rely - uy * relx          # signed distance of C from the line
     h2 = r * r - off * off
-    _raise_first(np.logical_not(h2 >= 0.0), f"{name}: rod of {r:.6g} m cannot reach the slider line")
+    _require(h2 >= 0.0, f"{name}: rod of {r:.6g} m cannot reach the slider line")
     s = along + side * _sqrt(h2)
     x, y = line_point[0] + s * ux, line_point[1] + s * uy
     rodx, rody = x - c.x, y - c.y

@@ -141,8 +141,9 @@ class PunchLinkage:
     def excitation(self, phi, omega, epsilon) -> Excitation:
         """psi, xi, dxi/dt, d2xi/dt2 for shaft angle phi (rad), speed omega, acceleration epsilon."""
         if self.p.mode == SIX_BAR:
-            d = self.slider(self.alpha0 - np.asarray(phi, float), -np.asarray(omega, float),
-                            -np.asarray(epsilon, float))
+            if not isinstance(phi, float):
+                phi, omega, epsilon = (np.asarray(x, float) for x in (phi, omega, epsilon))
+            d = self.slider(self.alpha0 - phi, -omega, -epsilon)
             psi = self.y_top - d.y
             return Excitation(psi, self.p.xi0 - psi, d.vy, d.ay)
         psi, d1, d2 = self._required(phi)

@@ -237,3 +237,18 @@ def test_instances_in_one_process_are_independent(fmu_paths):
         alone.fmu.doStep(k * 1e-3, 1e-3)
     assert a.get("y") == alone.get("y")
     assert b.get("y") != a.get("y")
+
+
+def test_ensure_built_rebuilds_only_what_is_missing_or_stale(fmu_dir, tmp_path):
+    import shutil
+
+    from components.build import ensure_built
+
+    target = tmp_path / "fmus"
+    shutil.copytree(fmu_dir, target)
+    before = {p.name: p.stat().st_mtime_ns for p in target.glob("*.fmu")}
+    ensure_built(["MainShaft", "PunchContact"], target)
+    assert {p.name: p.stat().st_mtime_ns for p in target.glob("*.fmu")} == before
+    (target / "MainShaft.fmu").write_bytes(b"not a zip")        # broken: rebuilt
+    ensure_built(["MainShaft"], target)
+    assert validate_fmu(str(target / "MainShaft.fmu")) == []
