@@ -85,6 +85,9 @@ def build_fmu(name: str, dest: Path | None = None) -> Path:
     """Build one FMU into dest (default fmus/) and return its path."""
     from pythonfmu.builder import FmuBuilder
 
+    if not FmuBuilder.has_binary():
+        raise RuntimeError(f"the pythonfmu imported from {FmuBuilder.__module__} carries no binary "
+                           f"for this platform (an FMU's embedded copy?): cannot build {name}")
     if name not in FMUS:
         raise KeyError(f"unknown FMU {name!r} (known: {', '.join(FMUS)})")
     dest = Path(dest or default_fmu_dir())

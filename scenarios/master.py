@@ -24,6 +24,7 @@ import atexit
 import ctypes
 import math
 import shutil
+import sys
 import time as clock
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -291,7 +292,15 @@ class Master:
     def _initialize(self, unit: _Unit, stop: float) -> None:
         """Instantiate, set parameters, take inputs from the already initialized sources."""
         fmu = unit.fmu
-        fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=True)
+        # pythonfmu puts the FMU's resources folder first on sys.path at every instantiation
+        # and leaves it there: later imports of this process would find the FMU's copies
+        # (its pythonfmu lacks the binaries the builder needs) and sys.path would grow with
+        # every instance. The FMU has imported its code by now: put sys.path back.
+        saved_path = list(sys.path)
+        try:
+            fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=True)
+        finally:
+            sys.path[:] = saved_path
         unit.instantiated = True
         unit.bind()
         try:

@@ -252,3 +252,21 @@ def test_ensure_built_rebuilds_only_what_is_missing_or_stale(fmu_dir, tmp_path):
     (target / "MainShaft.fmu").write_bytes(b"not a zip")        # broken: rebuilt
     ensure_built(["MainShaft"], target)
     assert validate_fmu(str(target / "MainShaft.fmu")) == []
+
+
+def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_paths, tmp_path):
+    """pythonfmu prepends each instance's resources folder to sys.path; the master puts it back,
+    or the FMU's embedded pythonfmu (without binaries) would serve later builds."""
+    import zipfile
+
+    from components.build import build_fmu
+    from scenarios.format import load
+    from scenarios.master import run
+
+    before = list(sys.path)
+    sc = load("punch_drive")
+    sc.revolutions = 1
+    run(sc, fmu_paths)
+    assert sys.path == before
+    path = build_fmu("MainShaft", tmp_path)
+    assert "binaries/linux64/MainShaft.so" in zipfile.ZipFile(path).namelist()
