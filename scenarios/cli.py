@@ -77,6 +77,27 @@ def cmd_compare(args) -> None:
         print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
 
 
+def cmd_sweep(args) -> None:
+    from .runner import ANALYSES
+    from .sweep import parse_grid_option, plot_table, points_of, run_sweep
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    grid = dict(parse_grid_option(g) for g in args.grid or [])
+    points = points_of(scenario, grid)
+    out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_sweep"
+    rows = run_sweep(scenario, points, out, workers=args.workers, scheduler=args.scheduler,
+                     keep_results=args.results, progress=not args.quiet)
+    failed = [r for r in rows if r["status"] != "ok"]
+    print(f"{scenario.name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
+    for row in failed:
+        print(f"  failed: {row['key']}: {row['error']}")
+    if args.plot and scenario.analysis in ANALYSES:
+        swept = [name for name, _ in points[0].values]
+        figures = [f for f in getattr(ANALYSES[scenario.analysis], "FIGURES", ())
+                   if f != "n_contacts"]
+        plot_table(rows, swept, figures, out / f"{scenario.name}_sweep.png", scenario.description)
+
+
 def _fmt(value) -> str:
     if isinstance(value, float):
         return f"{value:.4f}"
@@ -104,6 +125,21 @@ def main(argv=None) -> int:
         if name == "run":
             p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
             p.add_argument("--plot", action="store_true", help="write PNG figures")
+    p = sub.add_parser("sweep", help="a grid of co-simulations, in parallel")
+    p.add_argument("scenario", help="catalogue name or path to a .toml file")
+    p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
+                   help="override a parameter for every point")
+    p.add_argument("--grid", action="append", metavar="INSTANCE.PARAM=V1,V2,...",
+                   help="sweep this parameter over these values (adds to the file's grid)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on a Dask cluster, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--out", help="output folder (default: results/SCENARIO_sweep/); an "
+                                 "interrupted sweep into the same folder resumes")
+    p.add_argument("--results", action="store_true", help="also keep each point's results.csv")
+    p.add_argument("--plot", action="store_true", help="plot the figures against the parameters")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_sweep)
     args = parser.parse_args(argv)
     try:
         args.func(args)

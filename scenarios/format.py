@@ -71,6 +71,7 @@ class Scenario:
     revolutions: float | None
     shaft: str | None
     compare: dict[str, Any] | None
+    sweep: dict[str, Any] | None = None
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
@@ -169,7 +170,7 @@ def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
 
 def from_dict(data: dict, name: str, source: str) -> Scenario:
     known_top = {"description", "analysis", "connections", "record", "experiment", "instances",
-                 "compare"}
+                 "compare", "sweep"}
     for key in data:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
@@ -209,7 +210,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
                    if "stop_time" in exp else None),
         revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
-        shaft=exp.get("shaft"), compare=data.get("compare"))
+        shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
     for inst_name, spec in data["instances"].items():
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,
@@ -234,7 +235,22 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         probe = scenario.copy()
         for value in cmp["values"]:
             probe.set_value(cmp["parameter"], value, origin=f"{source}: compare")
+    if scenario.sweep is not None:
+        _check_sweep(scenario.sweep, source)
     return scenario
+
+
+def _check_sweep(sweep: Any, source: str) -> None:
+    """[sweep] grid = { "instance.parameter" = [values] }, or [[sweep.points]] tables."""
+    if not isinstance(sweep, dict) or set(sweep) - {"grid", "points"}:
+        raise ScenarioError(f"{source}: [sweep] takes grid = {{ \"instance.parameter\" = [...] }} "
+                            f"or [[sweep.points]]")
+    grid = sweep.get("grid", {})
+    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
+        raise ScenarioError(f"{source}: sweep.grid: each parameter needs a non-empty list of values")
+    points = sweep.get("points", [])
+    if not isinstance(points, list) or not all(isinstance(p, dict) and p for p in points):
+        raise ScenarioError(f"{source}: sweep.points must be tables of instance.parameter = value")
 
 
 def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
