@@ -73,16 +73,17 @@ def whole_process(repeat: int) -> None:
 
 # --- 2. master overhead on trivial FMUs ---------------------------------------------------------
 TRIVIAL = '''
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+import ctypes
 
-_namespace_refs = []   # pythonfmu 0.7.0 releases one reference to this namespace per instance
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
 
 class Trivial(Fmi2Slave):
     """One input copied to one output: the cheapest possible FMU."""
 
     def __init__(self, **kwargs):
-        _namespace_refs.append(globals())
+        # pythonfmu 0.7.0 releases one reference to this namespace per instance: take it back
+        ctypes.pythonapi.Py_IncRef(ctypes.py_object(globals()))
         super().__init__(**kwargs)
         self.u = 0.0
         self.y = 0.0

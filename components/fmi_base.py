@@ -151,9 +151,17 @@ class SewSlave(Fmi2Slave):
     def _output_getter(self, name: str) -> Callable[[], Any]:
         def get_output():
             if self._cache is None:
-                self._cache = self.current_outputs()
+                self._cache = self._checked(self.current_outputs())
             return self._cache[name]
         return get_output
+
+    def _checked(self, outputs: dict[str, Any]) -> dict[str, Any]:
+        """Refuse to hand out a NaN or infinite output: never a silently wrong number."""
+        for key, value in outputs.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                self._fail(f"output {key} is {value} at t = {self._time:g} s: the model has left "
+                           f"the range where it computes (inputs or parameters too large?)")
+        return outputs
 
     # --- the model -----------------------------------------------------------------------------
     def model(self):

@@ -72,6 +72,7 @@ class Scenario:
     shaft: str | None
     compare: dict[str, Any] | None
     sweep: dict[str, Any] | None = None
+    record_every: int = 1             # record every n-th communication point (long runs)
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
@@ -98,9 +99,15 @@ class Scenario:
                                     f"got {value!r}")
             self.master = value
             return
+        if key == "record_every":
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ScenarioError(f"{origin} experiment.record_every: must be a whole number "
+                                    f">= 1, got {value!r}")
+            self.record_every = value
+            return
         if key not in ("step", "stop_time", "revolutions"):
             raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
-                                f"(step, stop_time, revolutions, master)")
+                                f"(step, stop_time, revolutions, master, record_every)")
         number = _positive(value, f"{origin} experiment.{key}")
         setattr(self, key, number)
         if key == "stop_time":
@@ -175,7 +182,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
     exp = _table(data, "experiment", source)
-    known_exp = {"revolutions", "stop_time", "shaft", "step", "master"}
+    known_exp = {"revolutions", "stop_time", "shaft", "step", "master", "record_every"}
     for key in exp:
         if key not in known_exp:
             raise ScenarioError(f"{source}: unknown key experiment.{key} "
@@ -211,6 +218,9 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
+    if "record_every" in exp:
+        scenario.set_value("experiment.record_every", exp["record_every"],
+                           origin=f"{source}: experiment.record_every")
     for inst_name, spec in data["instances"].items():
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,

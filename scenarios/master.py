@@ -21,6 +21,7 @@ through preallocated ctypes arrays (no lookups by name, no per-step allocation).
 from __future__ import annotations
 
 import atexit
+import contextlib
 import ctypes
 import math
 import shutil
@@ -202,41 +203,100 @@ class Master:
 
     # --- the run -------------------------------------------------------------------------------
     def run(self) -> RunResult:
-        sc = self.scenario
-        stop = stop_time(sc)
-        if sc.step > stop:
-            raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
-                                f"run ({stop:g} s)")
-        n_steps = max(1, math.ceil(stop / sc.step - 1e-9))
-        log = _LogCollector()
-        units: list[_Unit] = []
+        """Open, step to the end, close: the whole scenario."""
         started = clock.perf_counter()
-        t = 0.0
-        phase = "loading"
+        with self:
+            while self.k < self.n_steps:
+                self.step()
+            result = self.result()
+        result.wall_time = clock.perf_counter() - started
+        return result
+
+    def __enter__(self) -> "Master":
         try:
-            units = self._load(log)
-            columns = self._plan(units)
-            phase = "initialization"
-            for unit in units:
-                self._initialize(unit, stop)
-            data = np.empty((n_steps + 1, len(columns)))
-            self._record(units, data, 0)
-            phase = "step"
-            for k in range(n_steps):
-                t = k * sc.step
-                h = min(sc.step, stop - t)
-                self.exchange_and_step(units, t, h)
-                self._record(units, data, k + 1)
-            times = np.minimum(np.arange(n_steps + 1) * sc.step, stop)
+            self.open()
+        except BaseException:
+            self.close()            # instances initialized before the failure are freed
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def open(self) -> None:
+        """Load the FMUs, initialize them in dependency order, record the initial point."""
+        sc = self.scenario
+        self.stop = stop_time(sc)
+        if sc.step > self.stop:
+            raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
+                                f"run ({self.stop:g} s)")
+        self.n_steps = max(1, math.ceil(self.stop / sc.step - 1e-9))
+        self.every = max(1, int(sc.record_every))
+        self.log = _LogCollector()
+        self.units: list[_Unit] = []
+        self.k = 0
+        self._phase = "loading"
+        with self._reporting():
+            self.units = self._load(self.log)
+            self.columns = self._plan(self.units)
+            self._phase = "initialization"
+            for unit in self.units:
+                self._initialize(unit, self.stop)
+        self._rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
+        self._data = np.empty((self._rows, len(self.columns)))
+        self._times = np.empty(self._rows)
+        self._row = 0
+        self._record_row(0.0)
+        self._phase = "step"
+
+    def step(self) -> None:
+        """One communication step (the last one ends exactly at the stop time)."""
+        t = self.k * self.scenario.step
+        h = min(self.scenario.step, self.stop - t)
+        with self._reporting(t, h):
+            self.exchange_and_step(self.units, t, h)
+        self.k += 1
+        if self.k % self.every == 0 or self.k == self.n_steps:
+            self._record_row(min(self.k * self.scenario.step, self.stop))
+
+    def save_state(self) -> tuple:
+        """The state of every FMU and of the master: `restore_state` rolls back to it."""
+        with self._reporting(self.k * self.scenario.step):
+            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.units])
+
+    def restore_state(self, state: tuple) -> None:
+        self.k, self._row, fmu_states = state
+        with self._reporting(self.k * self.scenario.step):
+            for unit, fmu_state in zip(self.units, fmu_states):
+                unit.fmu.setFMUstate(fmu_state)
+            for unit in self.units:            # the caches follow the restored FMUs
+                unit.read_outputs()
+
+    def result(self) -> RunResult:
+        rows = slice(0, self._row)
+        return RunResult(self.scenario, self._times[rows].copy(),
+                         {c: self._data[rows, j].copy() for j, c in enumerate(self.columns)},
+                         0.0, self.log.lines)
+
+    def close(self) -> None:
+        self._free(getattr(self, "units", []))
+
+    @contextlib.contextmanager
+    def _reporting(self, t: float = 0.0, h: float | None = None):
+        """Turn a failed FMI call into a CosimError naming the FMU, the time and its log."""
+        try:
+            yield
         except FMICallException as err:
-            failed = [u for u in units if u.failed]
+            failed = [u for u in self.units if u.failed]
             who = failed[0].name if failed else "an FMU"
-            raise CosimError(f"{who} failed during {phase} at t = {t:g} s: "
-                             f"{_reason(log.for_instance(who), err)}") from None
-        finally:
-            self._free(units)
-        wall = clock.perf_counter() - started
-        return RunResult(sc, times, {c: data[:, j] for j, c in enumerate(columns)}, wall, log.lines)
+            when = f"at t = {t:g} s" if h is None else f"from t = {t:g} to {t + h:g} s"
+            raise CosimError(f"{who} failed during {self._phase} {when}: "
+                             f"{_reason(self.log.for_instance(who), err)}") from None
+
+    def _record_row(self, t: float) -> None:
+        self._times[self._row] = t
+        self._record(self.units, self._data, self._row)
+        self._row += 1
 
     def exchange_and_step(self, units: list[_Unit], t: float, h: float) -> None:
         raise NotImplementedError

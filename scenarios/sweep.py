@@ -168,10 +168,22 @@ def _execute(scenario, todo, results_dir, workers, scheduler):
     # they start fast and do not inherit this process's loaded FMU libraries and threads
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["scenarios.runner"])
-    with cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context) as pool:
+    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context)
+    try:
         futures = [pool.submit(run_point, scenario, p, results_dir) for p in todo]
         for future in cf.as_completed(futures):
             yield future.result()
+    except BaseException:
+        # Ctrl-C (or any error): stop the workers now rather than after their current point;
+        # what finished is already in points.jsonl, and a rerun resumes from there
+        workers_alive = list(getattr(pool, "_processes", {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in workers_alive:
+            process.terminate()
+        for process in workers_alive:
+            process.join(timeout=5)
+        raise
+    pool.shutdown(wait=True)
 
 
 def _write_table(rows: list[dict], swept: list[str], path: Path) -> None:

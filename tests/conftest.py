@@ -14,3 +14,11 @@ def fmu_dir(tmp_path_factory):
 @pytest.fixture(scope="session")
 def fmu_paths(fmu_dir):
     return {p.stem: p for p in fmu_dir.glob("*.fmu")}
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _free_test_hosts():
+    """Free every test host's FMU instance before the interpreter exits (see fmu_host.py)."""
+    yield
+    from tests.fmu_host import close_all
+    close_all()

@@ -185,6 +185,8 @@ for k in range(spec["steps"]):
 out = dict(zip(spec["get"], fmu.getReal([vr[n] for n in spec["get"]])))
 carried = sorted({m.__file__ for n, m in sys.modules.items()
                   if n.startswith("sewfmu_") and getattr(m, "__file__", None)})
+fmu.terminate()
+fmu.fmi2FreeInstance(fmu.component)
 print(json.dumps({"out": out, "unzip": unzip, "modules": carried}))
 '''
 
@@ -194,7 +196,7 @@ def _run_alone(tmp_path, fmu_path, spec):
     proc = subprocess.run([sys.executable, "-c", _ALONE, str(REPO), str(fmu_path),
                            json.dumps(spec)], cwd=tmp_path, env=env, capture_output=True,
                           text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr
+    assert proc.returncode == 0, (fmu_path.name, proc.stderr)
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["modules"], "no sewfmu module was loaded from the FMU"
     for module_file in result["modules"]:

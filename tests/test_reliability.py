@@ -1,0 +1,294 @@
+"""Reliability: bad input gets one clear line, a failing FMU stops the run cleanly, states roll
+back exactly, instances and builds stay independent, Ctrl-C leaves nothing behind, memory stays
+flat, and random parameter sets never crash the host."""
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from components.build import PACKAGE_DIR, build_fmu
+from components.punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
+from scenarios.cli import main
+from scenarios.format import ScenarioError, load
+from scenarios.master import CosimError, JacobiMaster, run
+from tests.fmu_host import Host
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(autouse=True)
+def _fmus(fmu_dir, monkeypatch):
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
+
+
+# --- bad input: one line, non-zero exit, no results that look complete ------------------------
+PUNCH = (REPO / "scenarios" / "catalogue" / "punch_drive.toml").read_text()
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda t: t.replace("[experiment]", "[experiment\n"), ["not valid TOML"]),
+    (lambda t: t.replace("revolutions = 10", "revolutions = 10\nspeed = 3"),
+     ["unknown key experiment.speed"]),
+    (lambda t: t.replace('"shaft.phi -> linkage.phi"', '"shaft.angle -> linkage.phi"'),
+     ["connection", "shaft.angle", "has no output 'angle'"]),
+    (lambda t: t.replace('"shaft.phi -> linkage.phi"', '"shaft.omega -> linkage.phi"'),
+     ["incompatible units", "rad/s", "rad"]),
+    (lambda t: t.replace("parameters = { omega0 = 100.0 }", 'parameters = { omega0 = "fast" }'),
+     ["instances.shaft.parameters", "must be a number"]),
+    (lambda t: t.replace("parameters = { omega0 = 100.0 }", "parameters = { omega_0 = 100.0 }"),
+     ["broken.toml", "omega_0", "unknown parameter"]),
+    (lambda t: t.replace("step = 2.5e-4", "step = 2.0"), ["longer than the run"]),
+    (lambda t: t.replace("step = 2.5e-4", "step = -1e-4"), ["experiment.step", "positive"]),
+    (lambda t: t.replace('fmu = "PunchContact"', 'fmu = "PunchBody"'), ["unknown FMU 'PunchBody'"]),
+    (lambda t: t.replace('fmu = "PunchContact"', 'fmu = "PunchContact"\nparameters = { mass = 1.0 }'),
+     ["broken.toml", "punch.mass", "has no parameter 'mass'"]),
+])
+def test_a_broken_scenario_file_is_named_with_its_key(tmp_path, capsys, edit, words):
+    path = tmp_path / "broken.toml"
+    path.write_text(edit(PUNCH))
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    for word in words:
+        assert word in err, err
+    assert not (out / "results.csv").exists()
+
+
+@pytest.mark.parametrize("value, words", [("nan", ["parameter omega0", "finite"]),
+                                          ("inf", ["parameter omega0", "finite"]),
+                                          ("-5", ["parameter omega0", "> 0"])])
+def test_nan_infinite_or_negative_values_are_refused(capsys, tmp_path, value, words):
+    assert main(["run", "punch_drive", "--set", f"shaft.omega0={value}",
+                 "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    with pytest.raises(ScenarioError):
+        main(["--debug", "run", "no_such_scenario", "--out", str(tmp_path)])
+
+
+# --- an FMU that fails in mid-run ----------------------------------------------------------------
+def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
+    sc = load("punch_drive")
+    # a shaft that starts from rest and runs up towards an absurd speed: at t = 0 all is
+    # finite, after the first steps the linkage's acceleration overflows to infinity
+    sc.set_value("shaft.omega0", 1e200)
+    sc.set_value("shaft.ramp_time", 10.0)
+    sc.set_value("experiment.stop_time", 3.0)
+    sc.set_value("experiment.step", 0.5)
+    master = JacobiMaster(sc, fmu_paths)
+    with pytest.raises(CosimError) as err:
+        master.run()
+    text = str(err.value)
+    assert text.startswith("linkage failed during step from t = "), text
+    assert "output xi_ddot is nan at t = 0.5 s" in text
+    # the others terminated and freed; the failed one gets no further call (after fmi2Fatal,
+    # and pythonfmu has already released its objects: freeing it again would crash the host)
+    assert [u.name for u in master.units if u.failed] == ["linkage"]
+    assert all(not u.instantiated for u in master.units if not u.failed)
+
+
+# --- state: the master rolls back, every FMU restores (and serializes) exactly ------------------
+@pytest.mark.parametrize("scenario", ["punch_drive", "takeup", "feed", "carriage_startstop"])
+def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario):
+    sc = load(scenario)
+    sc.set_value("experiment.revolutions", 2)
+    with JacobiMaster(sc, fmu_paths) as master:
+        for _ in range(master.n_steps // 4):
+            master.step()
+        saved = master.save_state()
+        for _ in range(master.n_steps // 4):
+            master.step()
+        first = master.result()
+        master.restore_state(saved)
+        for _ in range(master.n_steps // 4):
+            master.step()
+        second = master.result()
+    for name in first.columns:
+        assert np.array_equal(first[name], second[name]), name
+
+
+def test_every_fmu_state_survives_serialization(fmu_paths):
+    """Serialize each FMU's state to bytes, run on, restore from the bytes: the same steps."""
+    for scenario in ("punch_drive", "carriage_startstop", "takeup", "feed"):
+        sc = load(scenario)
+        sc.set_value("experiment.revolutions", 1)
+        with JacobiMaster(sc, fmu_paths) as master:
+            for _ in range(master.n_steps // 3):
+                master.step()
+            blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.units]
+            k, row = master.k, master._row
+            for _ in range(master.n_steps // 3):
+                master.step()
+            first = master.result()
+            master.restore_state((k, row, [u.fmu.deSerializeFMUstate(b)
+                                           for u, b in zip(master.units, blobs)]))
+            for _ in range(master.n_steps // 3):
+                master.step()
+            second = master.result()
+        for name in first.columns:
+            assert np.array_equal(first[name], second[name]), (scenario, name)
+
+
+# --- many instances, two builds -----------------------------------------------------------------
+def test_fifty_punch_instances_in_one_process_are_independent(fmu_paths):
+    stiffness = np.linspace(3e4, 3e5, 50)
+    hosts = []
+    for k, c3 in enumerate(stiffness):
+        host = Host(fmu_paths["PunchContact"], f"punch{k}")
+        host.set(c3=c3, xi=2e-3, xi_dot=-0.05)
+        host.fmu.exitInitializationMode()
+        hosts.append(host)
+    for step in range(40):                                   # interleaved
+        for host in hosts:
+            host.fmu.doStep(step * 1e-3, 1e-3)
+    assert len({host.get("y") for host in hosts}) == 50
+    for host, c3 in zip(hosts, stiffness):
+        model = PunchContact(PunchContactParams(c3=float(c3)))
+        state = model.initial_state(2e-3, -0.05)
+        for step in range(40):
+            t = step * 1e-3
+            state = model.step(state, 2e-3 - 0.05 * t, -0.05, 0.0, 1e-3)
+        assert host.get("y") == pytest.approx(state.y, rel=1e-12, abs=1e-18)
+
+
+def test_two_builds_with_different_code_each_run_their_own(fmu_paths, tmp_path):
+    """A copy of the model code with gravity switched off, built into a second PunchContact:
+    loaded beside the original in this process, each settles where its own code says."""
+    source = tmp_path / "components"
+    shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
+    code = (source / "punch_contact.py").read_text()
+    (source / "punch_contact.py").write_text(code.replace("GRAVITY = 9.81", "GRAVITY = 0.0"))
+    weightless = build_fmu("PunchContact", tmp_path / "fmus", source=source)
+    settled = []
+    for path in (fmu_paths["PunchContact"], weightless):
+        host = Host(path, "punch")
+        host.set(xi=2e-3)
+        host.fmu.exitInitializationMode()
+        for step in range(400):
+            host.fmu.doStep(step * 1e-3, 1e-3)
+        settled.append(host.get("y"))
+    p = PunchContactParams()
+    assert settled[1] - settled[0] == pytest.approx(p.m * GRAVITY / (p.c1 + p.c3), rel=1e-9)
+
+
+# --- Ctrl-C ---------------------------------------------------------------------------------------
+def _descendants(pid: int) -> set[int]:
+    children = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                ppid = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(ppid, []).append(int(entry.name))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_ctrl_c_during_a_sweep_leaves_no_process_behind(tmp_path):
+    out = tmp_path / "sweep"
+    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", "sweep", "punch_grid",
+                             "--workers", "2", "--quiet", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        log = out / "points.jsonl"
+        if log.exists() and log.read_text().count("\n") >= 1:
+            break
+        time.sleep(0.1)
+    family = _descendants(proc.pid)
+    assert family, "the sweep started no worker processes"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert "interrupted" in err
+    time.sleep(0.5)
+    assert not [pid for pid in family if _alive(pid)]
+    finished = (out / "points.jsonl").read_text().count("\n")
+    assert 1 <= finished < 27                       # a partial sweep, ready to resume
+
+
+# --- memory ---------------------------------------------------------------------------------------
+def _rss_mib() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    raise RuntimeError("no VmRSS")
+
+
+def test_memory_stays_flat_over_a_long_run(fmu_paths):
+    """5·10⁴ communication steps (bench/long_run.py does 10⁶): the resident size after the
+    first 10⁴ steps does not grow."""
+    sc = load("punch_drive")
+    sc.set_value("experiment.revolutions", 200)
+    sc.set_value("experiment.record_every", 1000)
+    with JacobiMaster(sc, fmu_paths) as master:
+        samples = []
+        for k in range(50_000):
+            master.step()
+            if k % 10_000 == 9_999:
+                samples.append(_rss_mib())
+    assert max(samples) - samples[0] < 3.0, samples
+
+
+# --- property-based: valid parameters never crash, invalid ones always get a clear error --------
+POSITIVE = ("m", "c1", "c2", "c3")
+NONNEGATIVE = ("F10", "b1", "b2", "b3", "F30")
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(values=st.fixed_dictionaries({
+    "m": st.floats(0.005, 1.0), "c1": st.floats(100.0, 1e4), "c2": st.floats(1e3, 5e5),
+    "c3": st.floats(1e3, 5e5), "F10": st.floats(0.0, 60.0), "b1": st.floats(0.0, 5.0),
+    "b2": st.floats(0.0, 300.0), "b3": st.floats(0.0, 30.0), "F30": st.floats(0.0, 20.0),
+    "compression_only": st.sampled_from([0, 1])}))
+def test_random_valid_parameters_never_crash_the_host(fmu_paths, values):
+    host = Host(fmu_paths["PunchContact"], "punch")
+    host.set(**values, xi=3e-3, xi_dot=-0.4)
+    host.fmu.exitInitializationMode()
+    for step in range(30):                       # falling onto the fabric and pressing
+        host.set(xi=3e-3 - 0.4 * step * 5e-4, xi_dot=-0.4)
+        host.fmu.doStep(step * 5e-4, 5e-4)
+    outputs = host.get("y", "y_dot", "F1", "F2", "F3")
+    assert all(math.isfinite(v) for v in outputs)
+    assert outputs[3] >= 0.0
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.sampled_from(POSITIVE + NONNEGATIVE),
+       value=st.one_of(st.just(float("nan")), st.just(float("inf")), st.just(-float("inf")),
+                       st.floats(-1e6, -1e-9)))
+def test_random_invalid_parameters_always_get_a_clear_error(fmu_paths, name, value):
+    host = Host(fmu_paths["PunchContact"], "punch")
+    host.set(**{name: value})
+    with pytest.raises(FMICallException):
+        host.fmu.exitInitializationMode()
+    errors = [line for line in host.log.lines if line.startswith("[ERROR]")]
+    assert errors and f"parameter {name}" in errors[0], host.log.lines
