@@ -98,6 +98,26 @@ def cmd_sweep(args) -> None:
         plot_table(rows, swept, figures, out / f"{scenario.name}_sweep.png", scenario.description)
 
 
+def cmd_export_ssp(args) -> None:
+    from .runner import export
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    print(export(scenario, Path(args.output)))
+
+
+def cmd_crosscheck(args) -> None:
+    from .runner import crosscheck
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_{args.host}"
+    rows = crosscheck(scenario, args.host, out)
+    print(f"{scenario.name} (step {scenario.step:g} s): sewfmu's master beside {args.host}; "
+          f"results in {out}/")
+    print(f"  {'figure':22s} {'sewfmu':>14s} {args.host:>14s} {'difference':>12s}")
+    for key, a, b, d in rows:
+        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
+
+
 def _fmt(value) -> str:
     if isinstance(value, float):
         return f"{value:.4f}"
@@ -125,6 +145,17 @@ def main(argv=None) -> int:
         if name == "run":
             p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
             p.add_argument("--plot", action="store_true", help="write PNG figures")
+    p = sub.add_parser("export-ssp", help="the scenario as an SSP 1.0 archive for other tools")
+    p.add_argument("scenario", help="catalogue name or path to a .toml file")
+    p.add_argument("-o", "--output", required=True, help="the .ssp file to write")
+    p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
+    p.set_defaults(func=cmd_export_ssp)
+    p = sub.add_parser("crosscheck", help="run the scenario in another FMI host and compare")
+    p.add_argument("scenario", help="catalogue name or path to a .toml file")
+    p.add_argument("--host", required=True, choices=["libcosim", "ecos"])
+    p.add_argument("--out", help="output folder (default: results/SCENARIO_HOST/)")
+    p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
+    p.set_defaults(func=cmd_crosscheck)
     p = sub.add_parser("sweep", help="a grid of co-simulations, in parallel")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",

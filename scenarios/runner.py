@@ -192,3 +192,50 @@ def compare(scenario: Scenario, fmu_dir: Path | None = None) -> list[tuple[str, 
         rows.append((key, a, b, diff))
     rows.append(("wall_time_s", round(result.wall_time, 3), round(ref_wall, 3), None))
     return rows
+
+
+def export(scenario: Scenario, path: Path, fmu_dir: Path | None = None) -> Path:
+    """The scenario as an SSP 1.0 archive for other co-simulation tools."""
+    from .ssp import export_ssp
+
+    return export_ssp(scenario, Path(path), fmus_for(scenario, fmu_dir))
+
+
+def _end_at(time: np.ndarray, columns: dict, stop: float):
+    """A fixed-step host cannot shorten its last step: end its record at the scenario's stop
+    time, interpolating the last row (as sewfmu's master ends exactly there)."""
+    if time[-1] <= stop + 1e-12:
+        return time, columns
+    keep = int(np.searchsorted(time, stop, side="right"))
+    new_time = np.append(time[:keep], stop)
+    out = {}
+    for name, values in columns.items():
+        out[name] = np.append(values[:keep], np.interp(stop, time, values))
+    return new_time, out
+
+
+def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | None = None):
+    """Run the exported scenario in another host; write its results.csv and summary.json;
+    return rows (figure, sewfmu, host, difference) and the two summaries."""
+    from .hosts import run_in_host
+
+    out_dir = Path(out_dir)
+    ssp = export(scenario, out_dir / f"{scenario.name}.ssp", fmu_dir)
+    own = simulate(scenario, fmu_dir)
+    time, columns, wall = run_in_host(host, ssp, scenario, list(own.columns),
+                                      out_dir / "results.csv")
+    time, columns = _end_at(time, columns, stop_time(scenario))
+    other = RunResult(scenario, time, columns, wall)
+    write_csv(other, out_dir / "results.csv")
+    mine, theirs = summarize(own), summarize(other)
+    theirs["host"] = host
+    write_json(theirs, out_dir / "summary.json")
+    rows = []
+    for key, value in mine.items():
+        if key in ("scenario", "master", "step", "stop_time"):
+            continue
+        b = theirs.get(key)
+        diff = value - b if isinstance(value, (int, float)) and isinstance(b, (int, float)) \
+            else None
+        rows.append((key, value, b, diff))
+    return rows

@@ -1,0 +1,100 @@
+"""Export a scenario as an SSP 1.0 archive (.ssp) that other co-simulation tools run unchanged.
+
+The archive holds SystemStructure.ssd at its root and the FMUs under resources/. Each component
+lists its connectors (inputs and outputs, with units) and binds the scenario's parameter values
+inline (ssd:ParameterBindings / ssv:ParameterSet); the connections are the scenario's; the
+DefaultExperiment carries the start and stop time. The communication step is not part of SSP 1.0:
+a host takes it as its own setting (`sewfmu crosscheck` passes the scenario's).
+"""
+from __future__ import annotations
+
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+from fmpy import read_model_description
+
+from components.fmi_base import UNITS
+
+from .format import Scenario
+from .master import stop_time
+
+SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+ET.register_namespace("ssd", SSD)
+ET.register_namespace("ssc", SSC)
+ET.register_namespace("ssv", SSV)
+
+
+def _q(ns: str, tag: str) -> str:
+    return f"{{{ns}}}{tag}"
+
+
+def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.ElementTree:
+    root = ET.Element(_q(SSD, "SystemStructureDescription"),
+                      {"version": "1.0", "name": scenario.name})
+    system = ET.SubElement(root, _q(SSD, "System"), {"name": scenario.name,
+                                                     "description": scenario.description})
+    elements = ET.SubElement(system, _q(SSD, "Elements"))
+    used_units = set()
+    for inst in scenario.instances.values():
+        md = read_model_description(str(fmu_paths[inst.fmu]))
+        comp = ET.SubElement(elements, _q(SSD, "Component"), {
+            "name": inst.name, "type": "application/x-fmu-sharedlibrary",
+            "source": f"resources/{inst.fmu}.fmu"})
+        connectors = ET.SubElement(comp, _q(SSD, "Connectors"))
+        for v in md.modelVariables:
+            if v.causality not in ("input", "output"):
+                continue
+            con = ET.SubElement(connectors, _q(SSD, "Connector"),
+                                {"name": v.name, "kind": v.causality})
+            attrib = {"unit": v.unit} if v.unit else {}
+            ET.SubElement(con, _q(SSC, v.type), attrib)
+            if v.unit:
+                used_units.add(v.unit)
+        if inst.parameters:
+            types = {v.name: v.type for v in md.modelVariables}
+            bindings = ET.SubElement(comp, _q(SSD, "ParameterBindings"))
+            binding = ET.SubElement(bindings, _q(SSD, "ParameterBinding"))
+            values = ET.SubElement(binding, _q(SSD, "ParameterValues"))
+            pset = ET.SubElement(values, _q(SSV, "ParameterSet"),
+                                 {"version": "1.0", "name": f"{inst.name}_parameters"})
+            params = ET.SubElement(pset, _q(SSV, "Parameters"))
+            for key, value in inst.parameters.items():
+                p = ET.SubElement(params, _q(SSV, "Parameter"), {"name": key})
+                kind = types.get(key, "Real")
+                text = str(int(value)) if kind == "Integer" else repr(float(value))
+                ET.SubElement(p, _q(SSV, kind), {"value": text})
+    connections = ET.SubElement(system, _q(SSD, "Connections"))
+    for con in scenario.connections:
+        ET.SubElement(connections, _q(SSD, "Connection"), {
+            "startElement": con.src, "startConnector": con.src_var,
+            "endElement": con.dst, "endConnector": con.dst_var})
+    units = ET.SubElement(root, _q(SSD, "Units"))
+    for name in sorted(used_units):
+        unit = ET.SubElement(units, _q(SSC, "Unit"), {"name": name})
+        ET.SubElement(unit, _q(SSC, "BaseUnit"), {k: str(v) for k, v in UNITS[name].items()})
+    ET.SubElement(root, _q(SSD, "DefaultExperiment"),
+                  {"startTime": "0", "stopTime": repr(stop_time(scenario))})
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def export_ssp(scenario: Scenario, path: Path, fmu_paths: dict[str, Path]) -> Path:
+    """Write the scenario as an .ssp archive; returns its path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tree = system_structure(scenario, fmu_paths)
+    with tempfile.NamedTemporaryFile(suffix=".ssd", delete=False) as f:
+        tree.write(f, encoding="UTF-8", xml_declaration=True)
+        ssd = f.name
+    staged = path.with_name(f".{path.name}.tmp")
+    with zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as z:
+        z.write(ssd, "SystemStructure.ssd")
+        for name in sorted({inst.fmu for inst in scenario.instances.values()}):
+            z.write(fmu_paths[name], f"resources/{name}.fmu")
+    Path(ssd).unlink()
+    staged.replace(path)
+    return path
