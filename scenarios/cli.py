@@ -105,6 +105,43 @@ def cmd_export_ssp(args) -> None:
     print(export(scenario, Path(args.output)))
 
 
+def cmd_references(args) -> None:
+    from components.catalogue import FMUS
+
+    from . import references
+    from .runner import fmus_for_names
+
+    paths = fmus_for_names(list(FMUS))
+    if args.regenerate:
+        for folder in references.regenerate(paths):
+            print(f"wrote {folder}")
+        return
+    problems = [p for name in FMUS for p in references.check(name, paths[name])]
+    for line in problems:
+        print(line)
+    if problems:
+        raise ScenarioError(f"{len(problems)} differences from the regression references")
+    print(f"all {len(FMUS)} FMUs match their references")
+
+
+def cmd_host_env(args) -> None:
+    import os
+
+    from .hosts import check_host_environment, host_environment
+
+    env = host_environment()
+    print("# what a host that is not a Python process (the ecos tool, an FMI tool in C++ or")
+    print("# Java) needs in its environment to run sewfmu's FMUs:")
+    for key, value in env.items():
+        print(f"export {key}={value}")
+    if args.check:
+        problems = check_host_environment(dict(os.environ))
+        if problems:
+            raise ScenarioError("this environment cannot host the FMUs outside Python: "
+                                + "; ".join(problems))
+        print("# this environment has all of it")
+
+
 def cmd_crosscheck(args) -> None:
     from .runner import crosscheck
 
@@ -152,10 +189,20 @@ def main(argv=None) -> int:
     p.set_defaults(func=cmd_export_ssp)
     p = sub.add_parser("crosscheck", help="run the scenario in another FMI host and compare")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
-    p.add_argument("--host", required=True, choices=["libcosim", "ecos"])
+    p.add_argument("--host", required=True, choices=["libcosim", "ecos", "ecos-cli"],
+                   help="libcosim and ecos in a child Python process; ecos-cli: the ecos "
+                        "command-line tool, a host that is not Python")
     p.add_argument("--out", help="output folder (default: results/SCENARIO_HOST/)")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.set_defaults(func=cmd_crosscheck)
+    p = sub.add_parser("references", help="check every FMU against its regression reference")
+    p.add_argument("--regenerate", action="store_true",
+                   help="rewrite the references from the current FMUs (deliberately)")
+    p.set_defaults(func=cmd_references)
+    p = sub.add_parser("host-env", help="the environment a non-Python FMI host needs")
+    p.add_argument("--check", action="store_true",
+                   help="check the current environment; one clear line if something is missing")
+    p.set_defaults(func=cmd_host_env)
     p = sub.add_parser("sweep", help="a grid of co-simulations, in parallel")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
@@ -180,8 +227,10 @@ def main(argv=None) -> int:
     except Exception as err:        # one clear line for the user; --debug for the traceback
         if args.debug:
             raise
+        from .hosts import HostError
         from .master import CosimError
-        kind = "" if isinstance(err, (ScenarioError, CosimError)) else f"{type(err).__name__}: "
+        known = (ScenarioError, CosimError, HostError)
+        kind = "" if isinstance(err, known) else f"{type(err).__name__}: "
         print(f"sewfmu: error: {kind}{err}", file=sys.stderr)
         return 1
     return 0

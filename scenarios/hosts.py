@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-HOSTS = ("libcosim", "ecos")
+HOSTS = ("libcosim", "ecos", "ecos-cli")
 
 
 class HostError(RuntimeError):
@@ -58,9 +58,126 @@ def _run_libcosim(ssp: str, step: float, stop: float, record: list[str]):
     return rows
 
 
+def _load_tbb() -> None:
+    """ecospy's library needs libtbb.so.12: the `tbb` wheel (interop extra) puts it in the
+    environment's lib/, which is not on the loader's path; load it globally first."""
+    import ctypes
+    tbb = Path(sys.prefix) / "lib" / "libtbb.so.12"
+    if not tbb.exists():
+        raise HostError(f"ecos needs libtbb.so.12; not found at {tbb}: pip install -e '.[interop]'")
+    ctypes.CDLL(str(tbb), mode=ctypes.RTLD_GLOBAL)
+
+
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
-    from ecospy import EcosSimulation, EcosSimulationStructure  # noqa: F401 (import check)
-    raise HostError("ecos: not supported yet")
+    from .ssp import PARAMETER_SET
+
+    _load_tbb()
+    from ecospy import EcosSimulation
+
+    sim = EcosSimulation(step_size=step, ssp_path=ssp)
+    sim.init(parameter_set=PARAMETER_SET)     # ecos applies a parameter set only when named
+    getters = []
+    for column in record:
+        inst, var = column.split(".", 1)
+        identifier = f"{inst}::{var}"
+        getters.append((sim.get_bool if var == "contact" else sim.get_real, identifier))
+    n_steps = int(np.ceil(stop / step - 1e-9))
+    rows = []
+    for k in range(n_steps):
+        sim.step()
+        rows.append([sim.get_time()] + [float(get(identifier)) for get, identifier in getters])
+    return rows
+
+
+# --- ecos out of process: the `ecos` command-line tool, a host that is not Python ------------
+def ecos_binary(name: str = "ecos") -> Path:
+    """ecospy's `ecos` or `proxyfmu` binary, with its run bit set (the wheel ships it without)."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("ecospy")
+    if spec is None or not spec.submodule_search_locations:
+        raise HostError("ecospy is not installed: pip install -e '.[interop]'")
+    path = Path(list(spec.submodule_search_locations)[0]) / "binaries" / name
+    if not path.exists():
+        raise HostError(f"ecospy has no {name} binary for this platform ({path})")
+    if not os.access(path, os.X_OK):
+        path.chmod(path.stat().st_mode | 0o111)
+    return path
+
+
+def host_environment() -> dict[str, str]:
+    """What a host that is not a Python process needs to run sewfmu's FMUs: pythonfmu's binary
+    is not linked to libpython, so the Python library must be preloaded, and the embedded
+    interpreter must find its standard library (PYTHONHOME) and the packages the FMUs import
+    (PYTHONPATH: numpy). LD_LIBRARY_PATH lets ecos find libtbb.so.12."""
+    import sysconfig
+
+    libdir, library = sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LDLIBRARY")
+    site = sysconfig.get_paths()["purelib"]
+    return {"LD_PRELOAD": os.path.join(libdir or "", library or ""),
+            "PYTHONHOME": sys.base_prefix,
+            "PYTHONPATH": site,
+            "LD_LIBRARY_PATH": str(Path(sys.prefix) / "lib")}
+
+
+def check_host_environment(env: dict[str, str]) -> list[str]:
+    """What is missing from `env` for a non-Python host; empty if it is complete."""
+    problems = []
+    preload = env.get("LD_PRELOAD", "")
+    libs = [p for p in preload.replace(":", " ").split() if "libpython" in Path(p).name]
+    if not libs:
+        problems.append("LD_PRELOAD does not name libpython3.x.so (the FMUs' binary needs the "
+                        "Python symbols; without it the host dies with a segmentation fault)")
+    elif not all(Path(p).exists() for p in libs):
+        problems.append(f"LD_PRELOAD names {libs[0]}, which does not exist (a Python built "
+                        f"without --enable-shared has no libpython to preload)")
+    if not env.get("PYTHONHOME") or not Path(env["PYTHONHOME"], "lib").exists():
+        problems.append("PYTHONHOME is not set to the Python installation (its lib/ holds the "
+                        "standard library the embedded interpreter needs)")
+    paths = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
+    if not any(Path(p, "numpy").exists() for p in paths):
+        problems.append("PYTHONPATH does not reach a site-packages with numpy (the FMUs "
+                        "import it)")
+    return problems
+
+
+def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout: float = 600.0):
+    """Run the .ssp with the `ecos` command-line tool; return (time, columns, wall)."""
+    from .master import stop_time
+    from .ssp import PARAMETER_SET
+
+    env = {**os.environ, **host_environment()}
+    problems = check_host_environment(env)
+    if problems:
+        raise HostError("ecos-cli cannot host the FMUs: " + "; ".join(problems))
+    out_dir = Path(out_dir)
+    work = out_dir / "ecos-cli"
+    work.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    proc = subprocess.run([str(ecos_binary()), "simulate", "--path", str(Path(ssp).resolve()),
+                           "--stepSize", repr(scenario.step),
+                           # one step beyond: the caller cuts the record at the stop time exactly
+                           "--stopTime", repr(stop_time(scenario) + scenario.step),
+                           "--parameterSet", PARAMETER_SET, "--noParallel", "-l", "warn"],
+                          cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
+    wall = time.perf_counter() - started
+    csvs = sorted(work.glob("*.csv"))
+    if proc.returncode != 0 or not csvs:
+        tail = " ".join((proc.stderr or proc.stdout).strip().splitlines()[-2:])
+        raise HostError(f"ecos-cli exited with status {proc.returncode}: {tail or 'no message'}")
+    return (*_read_ecos_csv(csvs[-1], record), wall)
+
+
+def _read_ecos_csv(path: Path, record: list[str]):
+    """ecos's CSV: `iterations, time, inst::var[TYPE], ...`; values as written (6 decimals)."""
+    with open(path) as f:
+        header = [h.strip() for h in f.readline().split(",")]
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    index = {h.split("[")[0].replace("::", "."): j for j, h in enumerate(header)}
+    missing = [c for c in record if c not in index]
+    if missing:
+        raise HostError(f"ecos-cli wrote no column for {', '.join(missing)}")
+    return data[:, header.index("time")], {c: data[:, index[c]] for c in record}
 
 
 def _text(value) -> str:
@@ -91,6 +208,8 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
 
     if host not in HOSTS:
         raise HostError(f"unknown host {host!r} (hosts: {', '.join(HOSTS)})")
+    if host == "ecos-cli":
+        return run_ecos_cli(ssp, scenario, record, Path(out_csv).parent, timeout)
     out_csv = Path(out_csv)
     out_csv.parent.mkdir(parents=True, exist_ok=True)
     error_file = Path(str(out_csv) + ".error")

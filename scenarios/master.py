@@ -80,6 +80,30 @@ def _reason(lines: list[str], err: Exception) -> str:
     return " ".join(text.split())
 
 
+def instantiate(fmu: FMU2Slave, log: "_LogCollector") -> None:
+    """fmi2Instantiate, leaving this process's sys.path as it was.
+
+    pythonfmu puts the FMU's resources folder first on sys.path at every instantiation and
+    leaves it there: later imports of this process would find the FMU's copies (its pythonfmu
+    lacks the binaries the builder needs) and sys.path would grow with every instance. The FMU
+    has imported its code by then, so sys.path is put back.
+    """
+    saved_path = list(sys.path)
+    try:
+        fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
+    finally:
+        sys.path[:] = saved_path
+
+
+def release(fmu: FMU2Slave) -> None:
+    """Terminate and free a healthy instance, keeping its library loaded (see Master._free)."""
+    try:
+        fmu.terminate()
+    except Exception:
+        pass
+    fmu.fmi2FreeInstance(fmu.component)
+
+
 class _LogCollector:
     """FMU log callback that keeps the messages (for error reports) instead of printing them."""
 
@@ -352,15 +376,7 @@ class Master:
     def _initialize(self, unit: _Unit, stop: float) -> None:
         """Instantiate, set parameters, take inputs from the already initialized sources."""
         fmu = unit.fmu
-        # pythonfmu puts the FMU's resources folder first on sys.path at every instantiation
-        # and leaves it there: later imports of this process would find the FMU's copies
-        # (its pythonfmu lacks the binaries the builder needs) and sys.path would grow with
-        # every instance. The FMU has imported its code by now: put sys.path back.
-        saved_path = list(sys.path)
-        try:
-            fmu.instantiate(callbacks=unit.log.callbacks, loggingOn=True)
-        finally:
-            sys.path[:] = saved_path
+        instantiate(fmu, unit.log)
         unit.instantiated = True
         unit.bind()
         try:
@@ -394,16 +410,9 @@ class Master:
             # after a failed call FMI allows no further call on that instance (pythonfmu
             # reports every Python exception as fmi2Fatal and has already dropped its objects)
             if unit.instantiated and not unit.failed:
-                try:
-                    unit.fmu.terminate()
-                except Exception:
-                    pass           # an FMU in error may refuse to terminate; free it anyway
-                try:
-                    # free the instance but keep the library loaded: the extraction cache
-                    # reuses it, and unloading pythonfmu's binary from a Python host is unsafe
-                    unit.fmu.fmi2FreeInstance(unit.fmu.component)
-                except Exception:
-                    pass
+                # terminate and free, but keep the library loaded: the extraction cache reuses
+                # it, and unloading pythonfmu's binary from a Python host is unsafe
+                release(unit.fmu)
                 unit.instantiated = False
 
 

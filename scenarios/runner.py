@@ -73,6 +73,10 @@ def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
     return STUDIES[name][1](Path(out_dir), plot)
 
 
+def fmus_for_names(names: list[str], fmu_dir: Path | None = None) -> dict[str, Path]:
+    return ensure_built(sorted(names), fmu_dir or default_fmu_dir())
+
+
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
     from components.catalogue import FMUS
 

@@ -23,6 +23,9 @@ from .master import stop_time
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+# every component's inline parameter set carries this name, so that a host that applies one
+# named set to the whole system (ecos: init(parameter_set=...)) applies all of them
+PARAMETER_SET = "sewfmu"
 ET.register_namespace("ssd", SSD)
 ET.register_namespace("ssc", SSC)
 ET.register_namespace("ssv", SSV)
@@ -60,7 +63,7 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
             binding = ET.SubElement(bindings, _q(SSD, "ParameterBinding"))
             values = ET.SubElement(binding, _q(SSD, "ParameterValues"))
             pset = ET.SubElement(values, _q(SSV, "ParameterSet"),
-                                 {"version": "1.0", "name": f"{inst.name}_parameters"})
+                                 {"version": "1.0", "name": PARAMETER_SET})
             params = ET.SubElement(pset, _q(SSV, "Parameters"))
             for key, value in inst.parameters.items():
                 p = ET.SubElement(params, _q(SSV, "Parameter"), {"name": key})

@@ -1,0 +1,111 @@
+"""The FMUs in other FMI tools: an SSP 1.0 export checked by pyssp-standard and the SSP schema,
+the same scenario in libcosim, in ecos and in the ecos command-line tool (a host that is not
+Python), the regression references, and fmutool -check."""
+import os
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from components.catalogue import FMUS
+from scenarios import references
+from scenarios.cli import main
+from scenarios.format import load
+from scenarios.hosts import check_host_environment, host_environment
+from scenarios.runner import crosscheck, export
+
+FIGURES_DEG = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg")
+FIGURES_N = ("F2_peak", "F2_weld_mean")
+
+
+@pytest.fixture(autouse=True)
+def _fmus(fmu_dir, monkeypatch):
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
+
+
+def test_ssp_export_is_valid_and_complete(tmp_path):
+    pyssp = pytest.importorskip("pyssp_standard")
+    import xmlschema
+    from pyssp_standard.ssd import SSD
+
+    sc = load("punch_drive")
+    sc.set_value("shaft.omega0", 250.0)
+    sc.set_value("punch.F30", 4.0)
+    path = export(sc, tmp_path / "punch.ssp")
+    folder = tmp_path / "unpacked"
+    zipfile.ZipFile(path).extractall(folder)
+    ssd_file = folder / "SystemStructure.ssd"
+    schema = Path(pyssp.__file__).parent / "resources" / "SystemStructureDescription.xsd"
+    xmlschema.XMLSchema10(str(schema)).validate(str(ssd_file))
+    assert sorted(p.name for p in (folder / "resources").iterdir()) == \
+        ["MainShaft.fmu", "PunchContact.fmu", "PunchLinkage.fmu"]
+    with SSD(ssd_file, "r") as ssd:
+        assert [e.name for e in ssd.system.elements] == ["shaft", "linkage", "punch"]
+        connections = {(c.start_element, c.start_connector, c.end_element, c.end_connector)
+                       for c in ssd.connections()}
+        assert connections == {(c.src, c.src_var, c.dst, c.dst_var) for c in sc.connections}
+        assert ssd.check_connections() == []
+    text = ssd_file.read_text()
+    assert 'name="omega0"' in text and 'value="250.0"' in text and 'value="4.0"' in text
+
+
+@pytest.mark.parametrize("host", ["libcosim", "ecos", "ecos-cli"])
+def test_other_hosts_give_the_same_figures(tmp_path, host):
+    """libcosim and ecos are plain fixed-step Jacobi masters that read outputs right after the
+    step; ecos-cli hosts the FMUs in a process that is not Python."""
+    rows = {key: (own, other) for key, own, other, _ in
+            crosscheck(load("punch_drive"), host, tmp_path / host)}
+    assert rows["n_contacts"][0] == rows["n_contacts"][1] == 1
+    for key in FIGURES_DEG:
+        assert abs(rows[key][0] - rows[key][1]) < 1.0, (key, rows[key])
+    for key in FIGURES_N:
+        assert abs(rows[key][0] - rows[key][1]) < 0.3, (key, rows[key])
+    assert (tmp_path / host / "results.csv").exists() and (tmp_path / host / "summary.json").exists()
+
+
+def test_a_non_python_host_without_its_environment_gets_a_clear_message(capsys, monkeypatch):
+    assert len(check_host_environment({})) == 3
+    assert check_host_environment({**os.environ, **host_environment()}) == []
+    for key in ("LD_PRELOAD", "PYTHONHOME", "PYTHONPATH"):
+        monkeypatch.delenv(key, raising=False)
+    assert main(["host-env", "--check"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "LD_PRELOAD does not name libpython" in err
+
+
+@pytest.mark.parametrize("name", list(FMUS))
+def test_every_fmu_matches_its_regression_reference(fmu_paths, name):
+    folder = references.REFERENCE_DIR / name
+    assert (folder / f"{name}_ref.csv").exists() and (folder / f"{name}_ref.opt").exists()
+    assert (folder / f"{name}_in.csv").exists() == (references.CASES[name].inputs is not None)
+    assert references.check(name, fmu_paths[name]) == []
+
+
+def test_a_changed_fmu_is_caught_by_its_reference(fmu_paths, tmp_path):
+    """The reference check is not blind: a reference made with other parameters fails."""
+    folder = tmp_path / "refs"
+    case = references.CASES["MainShaft"]
+    references.CASES["MainShaft"] = references.Case(case.stop, case.step,
+                                                    {"omega0": 151.0, "ramp_time": 0.1})
+    try:
+        references.regenerate({n: fmu_paths[n] for n in FMUS}, folder)
+    finally:
+        references.CASES["MainShaft"] = case
+    problems = references.check("MainShaft", fmu_paths["MainShaft"], folder)
+    assert problems and "phi differs" in problems[0]
+
+
+@pytest.mark.parametrize("name", list(FMUS))
+def test_fmutool_check_passes(fmu_paths, name):
+    tool = Path(sys.executable).parent / "fmutool"
+    if not tool.exists():
+        pytest.skip("fmu-manipulation-toolbox is not installed")
+    proc = subprocess.run([str(tool), "-input", str(fmu_paths[name]), "-check"],
+                          capture_output=True, text=True, timeout=120)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "compliant with FMI-2.0" in out and "No semantic error" in out, out
+    assert "ERROR" not in out
