@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
-from .fmi_base import Port, SewSlave
+from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
 
 
 class CarriageDriveSlave(SewSlave):
@@ -12,12 +12,8 @@ class CarriageDriveSlave(SewSlave):
 
     model_name = "CarriageDrive"
     params_class = CarriageDriveParams
-    inputs = (
-        Port("phi", "rad", "shaft angle"),
-        Port("omega", "rad/s", "shaft speed"),
-        Port("epsilon", "rad/s2", "shaft angular acceleration"),
-    )
-    taylor_inputs = (("phi", "omega", "epsilon"),)
+    inputs = SHAFT_INPUTS
+    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("x", "m", "table position along the motion axis", feedthrough=True),
         Port("v", "m/s", "table velocity", feedthrough=True),

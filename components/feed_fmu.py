@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from .feed import FeedLinkage, FeedParams
-from .fmi_base import Port, SewSlave
+from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
 
 
 class FeedLinkageSlave(SewSlave):
@@ -10,12 +10,8 @@ class FeedLinkageSlave(SewSlave):
 
     model_name = "FeedLinkage"
     params_class = FeedParams
-    inputs = (
-        Port("phi", "rad", "shaft angle = crank angle phi1"),
-        Port("omega", "rad/s", "shaft speed"),
-        Port("epsilon", "rad/s2", "shaft angular acceleration"),
-    )
-    taylor_inputs = (("phi", "omega", "epsilon"),)
+    inputs = SHAFT_INPUTS
+    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("phi3", "rad", "lever 3 (direction D -> C), in (-π, π]", feedthrough=True),
         Port("phi4", "rad", "rod 4 (direction E -> F), in (-π, π]", feedthrough=True),

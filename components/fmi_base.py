@@ -65,6 +65,15 @@ class Port:
     kind: str = "Real"             # "Real" or "Boolean"
 
 
+# the main shaft's motion: the inputs of every linkage, extrapolated inside a step
+SHAFT_INPUTS = (
+    Port("phi", "rad", "shaft angle, cumulative (the crank angle of the linkage)"),
+    Port("omega", "rad/s", "shaft speed"),
+    Port("epsilon", "rad/s2", "shaft angular acceleration"),
+)
+SHAFT_TAYLOR = (("phi", "omega", "epsilon"),)
+
+
 class FmuError(RuntimeError):
     """A call the FMU refuses: a bad parameter, a linkage that cannot assemble, a NaN input."""
 

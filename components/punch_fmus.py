@@ -1,7 +1,7 @@
 """FMUs PunchLinkage and PunchContact: the punch drive of the ultrasonic sewing machine."""
 from __future__ import annotations
 
-from .fmi_base import Port, SewSlave, fields_of
+from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave, fields_of
 from .punch_contact import PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 
@@ -11,12 +11,8 @@ class PunchLinkageSlave(SewSlave):
 
     model_name = "PunchLinkage"
     params_class = PunchLinkageParams
-    inputs = (
-        Port("phi", "rad", "shaft angle"),
-        Port("omega", "rad/s", "shaft speed"),
-        Port("epsilon", "rad/s2", "shaft angular acceleration"),
-    )
-    taylor_inputs = (("phi", "omega", "epsilon"),)
+    inputs = SHAFT_INPUTS
+    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("xi", "m", "kinematic excitation of the punch: xi0 - psi", feedthrough=True),
         Port("xi_dot", "m/s", "d(xi)/dt", feedthrough=True),

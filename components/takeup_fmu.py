@@ -1,7 +1,7 @@
 """FMU TakeupLinkage: the thread take-up four-bar and the path of its eye E."""
 from __future__ import annotations
 
-from .fmi_base import Port, SewSlave
+from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
 from .takeup import TakeupLinkage, TakeupParams
 
 
@@ -10,12 +10,8 @@ class TakeupLinkageSlave(SewSlave):
 
     model_name = "TakeupLinkage"
     params_class = TakeupParams
-    inputs = (
-        Port("phi", "rad", "shaft angle = crank angle theta, from +Z"),
-        Port("omega", "rad/s", "shaft speed"),
-        Port("epsilon", "rad/s2", "shaft angular acceleration"),
-    )
-    taylor_inputs = (("phi", "omega", "epsilon"),)
+    inputs = SHAFT_INPUTS
+    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("E_z", "m", "take-up eye E, Z", feedthrough=True),
         Port("E_x", "m", "take-up eye E, X", feedthrough=True),

@@ -72,9 +72,7 @@ def cmd_compare(args) -> None:
     rows = compare(scenario)
     print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
           f"co-simulation vs monolithic reference")
-    print(f"  {'figure':22s} {'co-simulation':>14s} {'reference':>14s} {'difference':>12s}")
-    for key, a, b, d in rows:
-        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
+    _print_side_by_side(rows, "co-simulation", "reference")
 
 
 def cmd_sweep(args) -> None:
@@ -150,7 +148,12 @@ def cmd_crosscheck(args) -> None:
     rows = crosscheck(scenario, args.host, out)
     print(f"{scenario.name} (step {scenario.step:g} s): sewfmu's master beside {args.host}; "
           f"results in {out}/")
-    print(f"  {'figure':22s} {'sewfmu':>14s} {args.host:>14s} {'difference':>12s}")
+    _print_side_by_side(rows, "sewfmu", args.host)
+
+
+def _print_side_by_side(rows, left: str, right: str) -> None:
+    """Rows (figure, left value, right value, difference) as an aligned table."""
+    print(f"  {'figure':22s} {left:>14s} {right:>14s} {'difference':>12s}")
     for key, a, b, d in rows:
         print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
 
