@@ -63,7 +63,8 @@ class RunResult:
 _EXTRACTED: dict[tuple, tuple[str, object]] = {}
 
 
-def _extracted(path: Path) -> tuple[str, object]:
+def extracted_fmu(path: Path) -> tuple[str, object]:
+    """(unzip folder, model description) of an FMU file, extracted once per process."""
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
     if key not in _EXTRACTED:
@@ -80,7 +81,7 @@ def _reason(lines: list[str], err: Exception) -> str:
     return " ".join(text.split())
 
 
-def instantiate(fmu: FMU2Slave, log: "_LogCollector") -> None:
+def instantiate(fmu: FMU2Slave, log: "LogCollector") -> None:
     """fmi2Instantiate, leaving this process's sys.path as it was.
 
     pythonfmu puts the FMU's resources folder first on sys.path at every instantiation and
@@ -104,7 +105,7 @@ def release(fmu: FMU2Slave) -> None:
     fmu.fmi2FreeInstance(fmu.component)
 
 
-class _LogCollector:
+class LogCollector:
     """FMU log callback that keeps the messages (for error reports) instead of printing them."""
 
     def __init__(self):
@@ -131,7 +132,7 @@ class _LogCollector:
 class _Unit:
     """One FMU instance in the master, with its value references resolved."""
 
-    def __init__(self, name: str, unzip_dir: str, md, log: _LogCollector):
+    def __init__(self, name: str, unzip_dir: str, md, log: LogCollector):
         self.name = name
         self.md = md
         self.variables = {v.name: v for v in md.modelVariables}
@@ -170,9 +171,7 @@ class _Unit:
         self.out_vr, self.out_buf, self.n_out = arrays(self.real_out, fmi2Real)
         self.bool_vr, self.bool_buf, self.n_bool = arrays(self.bool_out, fmi2Boolean)
         self.in_vr, self.in_buf, self.n_in = arrays([i for i, _, _ in self.inputs], fmi2Real)
-        self.out_view = np.ctypeslib.as_array(self.out_buf) if self.n_out else np.zeros(0)
-        self.bool_view = np.ctypeslib.as_array(self.bool_buf) if self.n_bool else np.zeros(0)
-        # where each input comes from: (source's real-output view, index)
+        # where each input comes from: (source unit, index in its real outputs)
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
 
     # --- per-step calls: batched, through the raw ctypes functions (fmpy's wrapper costs a few
@@ -256,7 +255,7 @@ class Master:
                                 f"run ({self.stop:g} s)")
         self.n_steps = max(1, math.ceil(self.stop / sc.step - 1e-9))
         self.every = max(1, int(sc.record_every))
-        self.log = _LogCollector()
+        self.log = LogCollector()
         self.units: list[_Unit] = []
         self.k = 0
         self._phase = "loading"
@@ -326,13 +325,13 @@ class Master:
         raise NotImplementedError
 
     # --- pieces of the run ---------------------------------------------------------------------
-    def _load(self, log: _LogCollector) -> list[_Unit]:
+    def _load(self, log: LogCollector) -> list[_Unit]:
         sc = self.scenario
         by_name = {}
         for inst in sc.instances.values():
             if inst.fmu not in self.fmu_paths:
                 raise ScenarioError(f"{sc.source}: instances.{inst.name}: unknown FMU {inst.fmu!r}")
-            unzip_dir, md = _extracted(Path(self.fmu_paths[inst.fmu]))
+            unzip_dir, md = extracted_fmu(Path(self.fmu_paths[inst.fmu]))
             by_name[inst.name] = _Unit(inst.name, unzip_dir, md, log)
         for con in sc.connections:
             what = f"{sc.source}: connection {con}"

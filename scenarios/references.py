@@ -81,15 +81,15 @@ def simulate_case(name: str, path: Path):
     from fmpy import simulate_fmu
     from fmpy.fmi2 import FMU2Slave
 
-    from .master import _extracted, _LogCollector, instantiate, release
+    from .master import extracted_fmu, LogCollector, instantiate, release
 
     case = CASES[name]
-    unzip_dir, md = _extracted(Path(path))
+    unzip_dir, md = extracted_fmu(Path(path))
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     inputs = _input_table(case) if case.inputs else None
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-    instantiate(fmu, _LogCollector())
+    instantiate(fmu, LogCollector())
     result = simulate_fmu(str(path), start_time=0.0, stop_time=case.stop,
                           output_interval=case.step, start_values=case.parameters,
                           input=inputs, output=outputs, validate=False, fmu_instance=fmu,

@@ -7,17 +7,17 @@ the process, and a healthy instance left unfreed can corrupt the heap at interpr
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
-from scenarios.master import _extracted, _LogCollector
+from scenarios.master import extracted_fmu, LogCollector
 
 OPEN_HOSTS: list["Host"] = []
 
 
 class Host:
     def __init__(self, path, name="inst"):
-        unzip_dir, self.md = _extracted(path)
+        unzip_dir, self.md = extracted_fmu(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.log = _LogCollector()
+        self.log = LogCollector()
         self.failed = False
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzip_dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
