@@ -89,6 +89,10 @@ def instantiate(fmu: FMU2Slave, log: "LogCollector") -> None:
     lacks the binaries the builder needs) and sys.path would grow with every instance. The FMU
     has imported its code by then, so sys.path is put back.
     """
+    # The installed pythonfmu first: an FMU imports the pythonfmu it finds, and if that were the
+    # FMU's embedded copy (no binaries), it would stay in sys.modules and serve later builds.
+    import pythonfmu  # noqa: F401
+
     saved_path = list(sys.path)
     try:
         fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
@@ -276,8 +280,10 @@ class Master:
         """One communication step (the last one ends exactly at the stop time)."""
         t = self.k * self.scenario.step
         h = min(self.scenario.step, self.stop - t)
-        with self._reporting(t, h):
+        try:                       # (no context manager here: this is the hot path)
             self.exchange_and_step(self.units, t, h)
+        except FMICallException as err:
+            raise self._failure(err, f"from t = {t:g} to {t + h:g} s") from None
         self.k += 1
         if self.k % self.every == 0 or self.k == self.n_steps:
             self._record_row(min(self.k * self.scenario.step, self.stop))
@@ -305,16 +311,18 @@ class Master:
         self._free(getattr(self, "units", []))
 
     @contextlib.contextmanager
-    def _reporting(self, t: float = 0.0, h: float | None = None):
+    def _reporting(self, t: float = 0.0):
         """Turn a failed FMI call into a CosimError naming the FMU, the time and its log."""
         try:
             yield
         except FMICallException as err:
-            failed = [u for u in self.units if u.failed]
-            who = failed[0].name if failed else "an FMU"
-            when = f"at t = {t:g} s" if h is None else f"from t = {t:g} to {t + h:g} s"
-            raise CosimError(f"{who} failed during {self._phase} {when}: "
-                             f"{_reason(self.log.for_instance(who), err)}") from None
+            raise self._failure(err, f"at t = {t:g} s") from None
+
+    def _failure(self, err: FMICallException, when: str) -> CosimError:
+        failed = [u for u in self.units if u.failed]
+        who = failed[0].name if failed else "an FMU"
+        return CosimError(f"{who} failed during {self._phase} {when}: "
+                          f"{_reason(self.log.for_instance(who), err)}")
 
     def _record_row(self, t: float) -> None:
         self._times[self._row] = t

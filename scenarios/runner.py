@@ -15,15 +15,33 @@ import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
 
-from . import carriage, feed, punch, takeup
+import importlib
+
 from .format import Scenario, ScenarioError
 from .master import RunResult, run, stop_time
 
-# what each scenario's `analysis` key selects: key figures and plots
-ANALYSES = {"punch": punch, "takeup": takeup, "feed": feed, "carriage": carriage}
+
+class _Analyses(dict):
+    """What each scenario's `analysis` key selects (key figures and plots): a module of this
+    package, imported when first used (start-up time counts in a short run)."""
+
+    NAMES = ("punch", "takeup", "feed", "carriage")
+
+    def __missing__(self, name: str):
+        if name not in self.NAMES:
+            raise KeyError(name)
+        self[name] = importlib.import_module(f"{__package__}.{name}")
+        return self[name]
+
+    def __contains__(self, name) -> bool:
+        return name in self.NAMES
+
+
+ANALYSES = _Analyses()
 
 
 def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
+    takeup = ANALYSES["takeup"]
     study = takeup.tolerance_study()
     write_json(study, out_dir / "summary.json")
     if plot:
@@ -34,6 +52,7 @@ def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
 
 
 def _feed_ratio(out_dir: Path, plot: bool) -> dict:
+    feed = ANALYSES["feed"]
     study = feed.ratio_study()
     summary = feed.summary_of_study(study)
     write_json(summary, out_dir / "summary.json")
@@ -48,6 +67,7 @@ def _feed_ratio(out_dir: Path, plot: bool) -> dict:
 
 
 def _carriage_resonance(out_dir: Path, plot: bool) -> dict:
+    carriage = ANALYSES["carriage"]
     study = carriage.resonance_study()
     write_json(study, out_dir / "summary.json")
     if plot:
@@ -170,7 +190,7 @@ def reference_summary(scenario: Scenario) -> tuple[dict, float]:
     if scenario.analysis != "punch":
         raise ScenarioError(f"{scenario.source}: no monolithic reference for analysis "
                             f"{scenario.analysis!r}")
-    from . import punch_reference
+    from . import punch, punch_reference
 
     params = {inst.fmu: dict(inst.parameters) for inst in scenario.instances.values()}
     t_end = stop_time(scenario)
@@ -190,7 +210,7 @@ def compare(scenario: Scenario, fmu_dir: Path | None = None) -> list[tuple[str, 
     cosim = summarize(result)
     ref, ref_wall = reference_summary(scenario)
     rows = []
-    for key in punch.FIGURES:
+    for key in ANALYSES["punch"].FIGURES:
         a, b = cosim.get(key), ref.get(key)
         diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
         rows.append((key, a, b, diff))
