@@ -39,8 +39,8 @@ def cmd_list(args) -> None:
     for name, path in sorted(catalogue().items()):
         print(f"  {name:18s} {load(str(path)).description}")
     print("studies:")
-    for name, (text, _) in sorted(STUDIES.items()):
-        print(f"  {name:18s} {text}")
+    for name, study in sorted(STUDIES.items()):
+        print(f"  {name:18s} {study.description}")
 
 
 def cmd_run(args) -> None:

@@ -116,12 +116,6 @@ def ratio_study() -> dict:
     return {"phi1_deg": np.degrees(_PHI1).tolist(), "lever_ratio": lever, "rod_ratio": rods}
 
 
-def summary_of_study(study: dict) -> dict:
-    """The study without the curves: one line per configuration."""
-    strip = lambda rows: [{k: v for k, v in r.items() if k != "phi5_deg"} for r in rows]
-    return {"lever_ratio": strip(study["lever_ratio"]), "rod_ratio": strip(study["rod_ratio"])}
-
-
 def plot_study(study: dict, path) -> None:
     import matplotlib
     matplotlib.use("Agg")

@@ -4,18 +4,19 @@ These are the functions behind the command line; they are meant to be called fro
 """
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import os
 import tempfile
 import time as clock
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
-
-import importlib
 
 from .format import Scenario, ScenarioError
 from .master import RunResult, run, stop_time
@@ -40,57 +41,56 @@ class _Analyses(dict):
 ANALYSES = _Analyses()
 
 
-def _takeup_tolerance(out_dir: Path, plot: bool) -> dict:
-    takeup = ANALYSES["takeup"]
-    study = takeup.tolerance_study()
-    write_json(study, out_dir / "summary.json")
-    if plot:
-        takeup.plot_tolerance(study, out_dir / "takeup_tolerance.png")
-    return {"nominal_stroke_mm": study["nominal_stroke_mm"],
-            "stroke_change_per_mm_of_pin_adjustment":
-                study["stroke_change_per_mm_of_pin_adjustment"]}
-
-
-def _feed_ratio(out_dir: Path, plot: bool) -> dict:
-    feed = ANALYSES["feed"]
-    study = feed.ratio_study()
-    summary = feed.summary_of_study(study)
-    write_json(summary, out_dir / "summary.json")
-    write_json(study, out_dir / "curves.json")
-    if plot:
-        feed.plot_study(study, out_dir / "feed_ratio.png")
+def _feed_headline(study: dict) -> dict:
     amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
                                                  if r["assembles"] else "cannot assemble")
                                    for r in rows}
-    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(summary["lever_ratio"], "l5_over_l4"),
-            "phi5_amplitude_deg_by_l2_over_l8": amplitude(summary["rod_ratio"], "l2_over_l8")}
+    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(study["lever_ratio"], "l5_over_l4"),
+            "phi5_amplitude_deg_by_l2_over_l8": amplitude(study["rod_ratio"], "l2_over_l8")}
 
 
-def _carriage_resonance(out_dir: Path, plot: bool) -> dict:
-    carriage = ANALYSES["carriage"]
-    study = carriage.resonance_study()
-    write_json(study, out_dir / "summary.json")
-    if plot:
-        carriage.plot_resonance(study, out_dir / "carriage_resonance.png")
-    return {key: study[key] for key in ("omega1", "omega2", "resonant_stitch_rate",
-                                        "peak_abs_U2_at_1600_um")}
+@dataclass(frozen=True)
+class Study:
+    """An evaluation of a model over parameter sets (not a co-simulation): a function of an
+    analysis module that returns the whole study, one that plots it, and its headline figures."""
+    description: str
+    module: str
+    compute: str
+    plot: str
+    headline: Callable[[dict], dict]
 
 
-# studies: evaluations of a model over parameter sets, not co-simulations
 STUDIES = {
-    "carriage_resonance": ("Carriage: steady-state peak tip deflection |U2| for 600 to 2000 "
-                           "stitches/min, the paper's carriage and its two remedies",
-                           _carriage_resonance),
-    "feed_ratio": ("Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and "
-                   "for the branches' rod-length ratio l2/l8 from 0.7 to 1.7", _feed_ratio),
-    "takeup_tolerance": ("Thread take-up: E's path with link lengths off by ±0.1 mm, and the "
-                         "stroke against the eccentric-pin adjustment of L_CD (±1 mm)",
-                         _takeup_tolerance),
+    "carriage_resonance": Study(
+        "Carriage: steady-state peak tip deflection |U2| for 600 to 2000 stitches/min, the "
+        "paper's carriage and its two remedies", "carriage", "resonance_study", "plot_resonance",
+        lambda s: {k: s[k] for k in ("omega1", "omega2", "resonant_stitch_rate",
+                                     "peak_abs_U2_at_1600_um")}),
+    "feed_ratio": Study(
+        "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
+        "branches' rod-length ratio l2/l8 from 0.7 to 1.7", "feed", "ratio_study", "plot_study",
+        _feed_headline),
+    "takeup_tolerance": Study(
+        "Thread take-up: E's path with link lengths off by ±0.1 mm, and the stroke against the "
+        "eccentric-pin adjustment of L_CD (±1 mm)", "takeup", "tolerance_study",
+        "plot_tolerance",
+        lambda s: {k: s[k] for k in ("nominal_stroke_mm",
+                                     "stroke_change_per_mm_of_pin_adjustment")}),
 }
 
 
 def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
-    return STUDIES[name][1](Path(out_dir), plot)
+    """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
+    and, with plot, NAME.png; return the headline figures."""
+    study, out_dir = STUDIES[name], Path(out_dir)
+    module = ANALYSES[study.module]
+    data = getattr(module, study.compute)()
+    headline = study.headline(data)
+    write_json(data, out_dir / "study.json")
+    write_json(headline, out_dir / "summary.json")
+    if plot:
+        getattr(module, study.plot)(data, out_dir / f"{name}.png")
+    return headline
 
 
 def fmus_for_names(names: list[str], fmu_dir: Path | None = None) -> dict[str, Path]:

@@ -100,3 +100,17 @@ def test_tolerance_study():
 def test_takeup_that_cannot_assemble_names_the_crank_angle():
     with pytest.raises(AssemblyError, match=r"crank angle theta = \d+\.\d°"):
         TakeupLinkage(TakeupParams(L_CD=8e-3))
+
+
+def test_studies_run_from_the_command_line(tmp_path, capsys):
+    import json
+
+    from scenarios.cli import main
+
+    assert main(["run", "takeup_tolerance", "--out", str(tmp_path / "t")]) == 0
+    summary = json.loads((tmp_path / "t" / "summary.json").read_text())
+    assert summary["stroke_change_per_mm_of_pin_adjustment"] == pytest.approx(
+        tolerance_study()["stroke_change_per_mm_of_pin_adjustment"])
+    assert "pin_adjustment" in json.loads((tmp_path / "t" / "study.json").read_text())
+    assert main(["run", "takeup_tolerance", "--set", "x.y=1", "--out", str(tmp_path)]) == 1
+    assert "takes no settings" in capsys.readouterr().err
