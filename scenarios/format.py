@@ -1,15 +1,16 @@
 """The scenario file: a small TOML that names FMU instances, connections and the experiment.
 
     description = "..."
-    analysis = "punch"                      # key figures and plots (scenarios/analyses.py)
+    analysis = "punch"                      # key figures and plots: scenarios/punch.py
     connections = ["shaft.phi -> linkage.phi", ...]
     record = ["punch.y", ...]               # optional; default: every output
 
     [experiment]
     revolutions = 10                        # or stop_time = 0.5 (s)
     shaft = "shaft"                         # the MainShaft instance whose turns are counted
-    step = 1e-4                             # communication step (s)
+    step = 2.5e-4                           # communication step (s)
     master = "jacobi"                       # or "gauss-seidel"
+    record_every = 1                        # optional: keep every n-th point (long runs)
 
     [instances.shaft]
     fmu = "MainShaft"
@@ -18,6 +19,10 @@
     [compare]                               # optional: overlaid runs
     parameter = "shaft.omega0"
     values = [100.0, 200.0, 300.0]
+
+    [sweep.grid]                            # optional: `sewfmu sweep` (or [[sweep.points]])
+    "shaft.omega0" = [100.0, 200.0, 300.0]
+    "punch.F30" = [0.0, 5.0, 10.0]
 
 Every mistake is a ScenarioError that names the file and the key.
 """
