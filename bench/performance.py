@@ -13,7 +13,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import statistics
 import subprocess
 import sys
@@ -21,7 +20,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 
 from components.build import ensure_built
 from components.catalogue import FMUS
@@ -31,7 +29,6 @@ from scenarios.runner import reference_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
-import math
 from scenarios import punch, punch_reference
 t_end = 10 * 2 * math.pi / 100.0
 ref = punch_reference.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,

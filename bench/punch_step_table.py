@@ -7,7 +7,6 @@ rtol 1e-10, switches located as events), the largest deviation of the punch heig
 communication points, and the co-simulation's wall time beside the reference's.
 """
 import argparse
-import time
 
 import numpy as np
 

@@ -88,7 +88,7 @@ class PunchContact:
     # --- state at the setup position ---------------------------------------------------------
     def initial_state(self, xi: float, xi_dot: float) -> PunchState:
         """At rest on the excitation (Delta = 0), with the switches consistent with that state."""
-        contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot, False, True)
+        contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot)
         return PunchState(xi, 0.0, contact, spring_on)
 
     # --- forces ------------------------------------------------------------------------------
@@ -116,12 +116,10 @@ class PunchContact:
         delta = xi - y
         return max(-delta, -(p.F30 + p.c3 * delta + p.b3 * (xi_dot - v)))
 
-    def _consistent_flags(self, y, v, xi, xi_dot, contact, spring_on):
+    def _consistent_flags(self, y, v, xi, xi_dot) -> tuple[bool, bool]:
+        """(contact, spring_on) as the state itself decides them."""
         contact = self._contact_g(y, v) < 0.0
-        if self.p.compression_only:
-            spring_on = self._spring_g(y, v, xi, xi_dot) < 0.0
-        else:
-            spring_on = True
+        spring_on = self._spring_g(y, v, xi, xi_dot) < 0.0 if self.p.compression_only else True
         return contact, spring_on
 
     # --- one communication step ----------------------------------------------------------------

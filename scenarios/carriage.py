@@ -28,11 +28,6 @@ DESIGNS = {
 }
 
 
-def _last_stitch(result, shaft="shaft"):
-    phi = result[f"{shaft}.phi"]
-    return phi >= phi[-1] - 2 * math.pi - 1e-12
-
-
 def _models(result, carriage="carriage", drive="drive"):
     inst = result.scenario.instances
     return (CarriageModal(with_values(CarriageParams(), **inst[carriage].parameters)),
@@ -41,7 +36,7 @@ def _models(result, carriage="carriage", drive="drive"):
 
 def summary_of_run(result, shaft="shaft", carriage="carriage") -> dict:
     model, _ = _models(result)
-    last = _last_stitch(result, shaft)
+    last = result.last_revolution(shaft)
     omega = float(result[f"{shaft}.omega"][-1])
     return {"omega1": float(model.omega[0]), "omega2": float(model.omega[1]),
             "stitch_rate_per_min": omega * 60 / (2 * math.pi),

@@ -26,13 +26,8 @@ def _swing_deg(angles: np.ndarray) -> float:
     return float(np.degrees(np.ptp(np.unwrap(angles))))
 
 
-def _last_revolution(result, shaft="shaft"):
-    phi = result[f"{shaft}.phi"]
-    return phi >= phi[-1] - 2 * math.pi - 1e-12
-
-
 def summary_of_run(result, shaft="shaft", feed="feed") -> dict:
-    last = _last_revolution(result, shaft)
+    last = result.last_revolution(shaft)
     col = lambda name: result[f"{feed}.{name}"][last]
     return {
         "phi3_swing_deg": _swing_deg(col("phi3")),
@@ -68,7 +63,7 @@ def plot(curves, path, title: str) -> None:
         model = FeedLinkage(with_values(FeedParams(), **result.scenario.instances["feed"].parameters))
         for k, phi1 in enumerate(np.radians([0, 90, 180, 270])):
             _draw(ax_mech, model, phi1, f"C{k}")
-        last = _last_revolution(result)
+        last = result.last_revolution()
         mx, my = result["feed.M_x"][last] * 1e3, result["feed.M_y"][last] * 1e3
         ax_mech.plot(mx, my, "k-", lw=2, label="path of M")
         ax_zoom.plot(mx, my, "k-", lw=1.5)

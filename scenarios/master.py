@@ -57,6 +57,12 @@ class RunResult:
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
 
+    def last_revolution(self, shaft: str = "shaft") -> np.ndarray:
+        """Mask of the samples in the shaft's last revolution (one stitch): the window every
+        analysis reads its key figures from."""
+        phi = self.columns[f"{shaft}.phi"]
+        return phi >= phi[-1] - 2 * math.pi - 1e-12
+
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Master._free), so it is loaded from one place only.
@@ -326,7 +332,7 @@ class Master:
 
     def _record_row(self, t: float) -> None:
         self._times[self._row] = t
-        self._record(self.units, self._data, self._row)
+        self._record(self._data, self._row)
         self._row += 1
 
     def exchange_and_step(self, units: list[_Unit], t: float, h: float) -> None:
@@ -406,7 +412,7 @@ class Master:
         fmu.exitInitializationMode()
         unit.read_outputs()
 
-    def _record(self, units, data: np.ndarray, row: int) -> None:
+    def _record(self, data: np.ndarray, row: int) -> None:
         out = data[row]
         for j, (unit, kind, idx) in enumerate(self._record_plan):
             out[j] = unit.out_buf[idx] if kind == "real" else unit.bool_buf[idx]

@@ -101,13 +101,6 @@ def summary_of_reference(ref) -> dict:
 
 
 # --- plots ------------------------------------------------------------------------------------
-def last_revolution(result, shaft="shaft"):
-    phi = result[f"{shaft}.phi"]
-    start = phi[-1] - 2 * math.pi
-    mask = phi >= start - 1e-12
-    return mask, np.degrees(phi[mask] - start)
-
-
 def plot(curves, path, title: str) -> None:
     """y(φ) and F2(φ) over the last revolution; `curves` is a list of (label, run result)."""
     import matplotlib
@@ -116,7 +109,9 @@ def plot(curves, path, title: str) -> None:
 
     fig, (ax_y, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     for label, result in curves:
-        mask, deg = last_revolution(result)
+        mask = result.last_revolution()
+        phi = result["shaft.phi"]
+        deg = np.degrees(phi[mask] - (phi[-1] - 2 * math.pi))
         ax_y.plot(deg, result["punch.y"][mask] * 1e3, label=label)
         ax_f.plot(deg, result["punch.F2"][mask], label=label)
     ax_y.plot(deg, result["linkage.xi"][mask] * 1e3, "k:", lw=1, label="ξ (slider)")

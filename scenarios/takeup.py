@@ -18,11 +18,6 @@ from components.takeup import TakeupLinkage, TakeupParams, path_stroke
 LINKS = ("L_AB", "L_BC", "L_CD", "L_BE")
 
 
-def _last_revolution(result, shaft="shaft"):
-    phi = result[f"{shaft}.phi"]
-    return phi >= phi[-1] - 2 * math.pi - 1e-12
-
-
 def central_difference(result, shaft="shaft", eye="takeup"):
     """The paper's velocity of E from the recorded samples: dE/dθ by central differences, × ω.
     NaN at the two ends, where a neighbour is missing."""
@@ -37,7 +32,7 @@ def central_difference(result, shaft="shaft", eye="takeup"):
 
 
 def summary_of_run(result, shaft="shaft", eye="takeup") -> dict:
-    last = _last_revolution(result, shaft)
+    last = result.last_revolution(shaft)
     ez, ex = result[f"{eye}.E_z"][last], result[f"{eye}.E_x"][last]
     vz, vx = result[f"{eye}.E_vz"][last], result[f"{eye}.E_vx"][last]
     az, ax = result[f"{eye}.E_az"][last], result[f"{eye}.E_ax"][last]
@@ -74,7 +69,7 @@ def plot(curves, path, title: str) -> None:
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     (ax_path, ax_disp), (ax_speed, ax_acc) = axes
     for label, result in curves:
-        last = _last_revolution(result)
+        last = result.last_revolution()
         deg = np.degrees(result["shaft.phi"][last] - result["shaft.phi"][last][0])
         ez, ex = result["takeup.E_z"][last] * 1e3, result["takeup.E_x"][last] * 1e3
         ax_path.plot(ez, ex, lw=2, label=f"E ({label})")

@@ -1,7 +1,6 @@
 """The FMUs as FMI components: validation, the co-simulation contract, parameter and input
 checks, state save and restore, and running from the .fmu file alone."""
 import json
-import math
 import os
 import subprocess
 import sys

@@ -4,7 +4,6 @@ Python), the regression references, and fmutool -check."""
 import os
 import subprocess
 import sys
-import tempfile
 import zipfile
 from pathlib import Path
 

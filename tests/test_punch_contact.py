@@ -1,5 +1,4 @@
 """The punch body's exact piecewise integration against scipy and against closed forms."""
-import math
 
 import numpy as np
 import pytest

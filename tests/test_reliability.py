@@ -1,9 +1,7 @@
 """Reliability: bad input gets one clear line, a failing FMU stops the run cleanly, states roll
 back exactly, instances and builds stay independent, Ctrl-C leaves nothing behind, memory stays
 flat, and random parameter sets never crash the host."""
-import json
 import math
-import os
 import shutil
 import signal
 import subprocess
@@ -18,10 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from components.build import PACKAGE_DIR, build_fmu
-from components.punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
+from components.punch_contact import GRAVITY, PunchContact, PunchContactParams
 from scenarios.cli import main
 from scenarios.format import ScenarioError, load
-from scenarios.master import CosimError, JacobiMaster, run
+from scenarios.master import CosimError, JacobiMaster
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
