@@ -14,6 +14,15 @@ step the excitation is the Taylor polynomial xi(τ) = x0 + x1·τ + x2·τ² bui
 xi, xi', xi''. So each piece is solved exactly (a damped oscillator under polynomial forcing) and
 the switches of contact and of spring 11 are located in time inside the step by bisection on the
 exact solution. No step size limit follows from stability, only from the extrapolation of xi.
+
+Compression only with a preload F30 > 0 makes spring 11 a captive spring: its force jumps from 0
+to F30 at Delta = 0. There the punch rests on the slider's stop, and the exact motion is an endless
+micro-bouncing on it (relative speed decaying slowly, one switch every few microseconds). The
+model treats that as what it is physically, the punch held on the stop ("held": y = xi, the stop
+force m·(xi'' + g) + F1 - F2 anywhere in [0, F30]), entered when a crossing of the stop would start
+an excursion shorter than the switch search resolves (a fraction of the shortest natural period),
+and left when the stop force needed leaves [0, F30] (above F30 the spring compresses, below 0 the
+punch lifts off the stop).
 """
 from __future__ import annotations
 
@@ -57,6 +66,8 @@ class PunchState:
     landings: int = 0      # contact onsets so far
     F2_max: float = 0.0    # largest F2 during the last step (the impact at landing is a jump
                            # that falls between communication points)
+    held: bool = False     # compression only, F30 > 0: the punch rests on the stop of spring 11
+                           # (y follows xi; spring_on is then True: the stop transmits force)
 
 
 @dataclass(frozen=True)
@@ -76,6 +87,22 @@ class ZenoError(RuntimeError):
     """Too many contact switches in one step (chattering that the model cannot resolve)."""
 
 
+class _Held:
+    """The punch held on the stop of spring 11 over one piece: it moves with the excitation
+    xi(t0 + u) = a0 + a1·u + a2·u² (the same interface as DampedOscillator)."""
+
+    __slots__ = ("a0", "a1", "a2")
+
+    def __init__(self, a0, a1, a2):
+        self.a0, self.a1, self.a2 = a0, a1, a2
+
+    def state(self, tau):
+        return self.a0 + tau * (self.a1 + tau * self.a2), self.a1 + 2.0 * tau * self.a2
+
+    def accel(self, tau, y, v):
+        return 2.0 * self.a2
+
+
 class PunchContact:
     """The punch body's dynamics with exact piecewise integration and located switches."""
 
@@ -84,19 +111,26 @@ class PunchContact:
         self.p = params
         stiffest = params.c1 + params.c2 + params.c3
         self.shortest_period = 2.0 * math.pi * math.sqrt(params.m / stiffest)
+        # only a preloaded compression-only spring 11 has a stop the punch can rest on
+        self.has_stop = bool(params.compression_only) and params.F30 > 0.0
 
     # --- state at the setup position ---------------------------------------------------------
-    def initial_state(self, xi: float, xi_dot: float) -> PunchState:
+    def initial_state(self, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchState:
         """At rest on the excitation (Delta = 0), with the switches consistent with that state."""
         contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot)
-        return PunchState(xi, 0.0, contact, spring_on)
+        held = self._sticks(xi, 0.0, xi, xi_dot, xi_ddot, contact, spring_on)
+        return PunchState(xi, 0.0, contact, spring_on or held, held=held)
 
     # --- forces ------------------------------------------------------------------------------
-    def outputs(self, s: PunchState, xi: float, xi_dot: float) -> PunchOutputs:
+    def outputs(self, s: PunchState, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchOutputs:
         p = self.p
         f1 = p.F10 + p.c1 * s.y + p.b1 * s.y_dot
         f2 = max(0.0, -(p.c2 * s.y + p.b2 * s.y_dot)) if s.contact else 0.0
         delta = xi - s.y
+        if s.held:                   # the stop carries whatever keeps the punch on the slider
+            f3 = self._stop_force(s.y, s.y_dot, xi_ddot, s.contact)
+            return PunchOutputs(s.y, s.y_dot, xi_ddot, f1, f2, f3, delta, s.contact,
+                                max(s.F2_max, f2))
         f3 = p.F30 + p.c3 * delta + p.b3 * (xi_dot - s.y_dot)
         if not s.spring_on:
             f3 = 0.0
@@ -104,6 +138,13 @@ class PunchContact:
             f3 = max(0.0, f3)
         a = (-f1 + f2 + f3) / p.m - GRAVITY
         return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact, max(s.F2_max, f2))
+
+    def _stop_force(self, y, v, xi_ddot, contact) -> float:
+        """Force of spring 11's stop that makes the punch move with the slider (y'' = xi'')."""
+        p = self.p
+        f1 = p.F10 + p.c1 * y + p.b1 * v
+        f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+        return p.m * (xi_ddot + GRAVITY) + f1 - f2
 
     # --- switching functions: negative while the current flag is consistent -------------------
     def _contact_g(self, y, v):
@@ -116,42 +157,84 @@ class PunchContact:
         delta = xi - y
         return max(-delta, -(p.F30 + p.c3 * delta + p.b3 * (xi_dot - v)))
 
+    def _release_g(self, y, v, xi_ddot, contact):
+        """< 0 while the stop can hold the punch: stop force in [0, F30]."""
+        f = self._stop_force(y, v, xi_ddot, contact)
+        return max(f - self.p.F30, -f)
+
     def _consistent_flags(self, y, v, xi, xi_dot) -> tuple[bool, bool]:
         """(contact, spring_on) as the state itself decides them."""
         contact = self._contact_g(y, v) < 0.0
         spring_on = self._spring_g(y, v, xi, xi_dot) < 0.0 if self.p.compression_only else True
         return contact, spring_on
 
+    def _sticks(self, y, v, xi, xi_dot, xi_ddot, contact, spring_on) -> bool:
+        """Whether the punch, at the stop of spring 11, comes to rest on it: the stop can hold
+        it (stop force in [0, F30]) and the excursion the current mode would start (ballistic:
+        2·|Delta'| / |Delta''|) is shorter than the switch search resolves. The relative kinetic
+        energy given up, m·Delta'^2 / 2, is below m·(|Delta''|·T/32)^2 / 2."""
+        p = self.p
+        if not self.has_stop:
+            return False
+        f3_star = p.F30 + p.c3 * (xi - y) + p.b3 * (xi_dot - v)
+        if f3_star < 0.5 * p.F30:           # a zero of F3* inside the travel, not the stop
+            return False
+        if not 0.0 <= self._stop_force(xi, xi_dot, xi_ddot, contact) <= p.F30:
+            return False
+        f1 = p.F10 + p.c1 * y + p.b1 * v
+        f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+        a = (-f1 + f2 + (f3_star if spring_on else 0.0)) / p.m - GRAVITY
+        excursion_speed = abs(xi_dot - v)
+        return 2.0 * excursion_speed <= abs(xi_ddot - a) * self.shortest_period / _SAMPLES_PER_PERIOD
+
     # --- one communication step ----------------------------------------------------------------
     def step(self, s: PunchState, x0: float, x1: float, x2: float, h: float) -> PunchState:
         """Advance by h under the excitation xi(τ) = x0 + x1·τ + x2·τ², τ in [0, h]."""
-        y, v, contact, spring_on, landings = s.y, s.y_dot, s.contact, s.spring_on, s.landings
-        if self.p.compression_only:
+        y, v, contact, spring_on, held = s.y, s.y_dot, s.contact, s.spring_on, s.held
+        landings = s.landings
+        if held:
+            # the punch rides on the slider: it starts this step where the new inputs put it,
+            # and leaves the stop at once if the stop cannot hold it under them
+            y, v = x0, x1
+            if self._release_g(y, v, 2.0 * x2, contact) > 0.0:
+                held, spring_on = False, self._stop_force(y, v, 2.0 * x2, contact) > self.p.F30
+        elif self.p.compression_only:
             # new inputs may have moved the slider: re-decide whether spring 11 bears
             spring_on = self._spring_g(y, v, x0, x1) < 0.0
         t0 = 0.0
         f2_max = 0.0
-        for _ in range(_MAX_SWITCHES_PER_STEP):
-            piece = self._piece(y, v, contact, spring_on, x0, x1, x2, t0)
-            event = self._first_switch(piece, contact, spring_on, x0, x1, x2, t0, h)
+        # a guard against an endless loop; every excursion that is not held spans a good part of
+        # a search sub-interval, so the count scales with them
+        n_sub = math.ceil(h / (self.shortest_period / _SAMPLES_PER_PERIOD))
+        for _ in range(_MAX_SWITCHES_PER_STEP + 4 * n_sub):
+            piece = self._piece(y, v, contact, spring_on, held, x0, x1, x2, t0)
+            event = self._first_switch(piece, contact, spring_on, held, x0, x1, x2, t0, h)
             t_end = h if event is None else event[0]
             if contact:
                 f2_max = max(f2_max, self._largest_F2(piece, t_end - t0))
             if event is None:
                 y, v = piece.state(h - t0)
-                return PunchState(y, v, contact, spring_on, landings, f2_max)
+                return PunchState(y, v, contact, spring_on, landings, f2_max, held)
             t_switch, which = event
             y, v = piece.state(t_switch - t0)
             t0 = t_switch
+            xi_ddot = 2.0 * x2
             if which == "contact":
                 contact = not contact
                 landings += contact
+            elif held:
+                held = False
+                spring_on = self._stop_force(y, v, xi_ddot, contact) > self.p.F30
             else:
                 spring_on = not spring_on
-        raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP} contact switches within one step of "
-                        f"{h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
+                xi, xi_dot = x0 + t0 * (x1 + t0 * x2), x1 + 2.0 * t0 * x2
+                if self._sticks(y, v, xi, xi_dot, xi_ddot, contact, spring_on):
+                    held, spring_on, y, v = True, True, xi, xi_dot
+        raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP + 4 * n_sub} contact switches within "
+                        f"one step of {h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, "
+                        f"c3, b3")
 
-    def _largest_F2(self, piece: DampedOscillator, length: float) -> float:
+    def _largest_F2(self, piece, length: float) -> float:
         """Largest fabric force -(c2·y + b2·y') on a contact piece of the given length."""
         c2, b2 = self.p.c2, self.p.b2
 
@@ -175,14 +258,16 @@ class PunchContact:
             best = max(best, force(0.5 * (lo + hi)))
         return max(best, 0.0)
 
-    def _piece(self, y, v, contact, spring_on, x0, x1, x2, t0) -> DampedOscillator:
-        """The exact solution from time t0 of the step, in the current contact/spring mode."""
+    def _piece(self, y, v, contact, spring_on, held, x0, x1, x2, t0):
+        """The exact solution from time t0 of the step, in the current mode."""
         p = self.p
         b, c = p.b1, p.c1
         # excitation re-centred at t0: xi(t0 + u) = a0 + a1·u + a2·u²
         a0 = x0 + t0 * (x1 + t0 * x2)
         a1 = x1 + 2.0 * t0 * x2
         a2 = x2
+        if held:
+            return _Held(a0, a1, a2)
         f0, f1, f2 = -p.F10 - p.m * GRAVITY, 0.0, 0.0
         if contact:
             b += p.b2
@@ -195,24 +280,26 @@ class PunchContact:
             f2 += p.c3 * a2
         return DampedOscillator(p.m, b, c, f0, f1, f2, y, v)
 
-    def _switch_functions(self, piece, tau, contact, spring_on, x0, x1, x2, t_abs):
+    def _switch_functions(self, piece, tau, contact, spring_on, held, x0, x1, x2, t_abs):
         """Switching functions at piece time tau, signed so that > 0 means 'flip this flag'."""
         y, v = piece.state(tau)
         g = self._contact_g(y, v)
         out = [("contact", g if contact else -g)]
-        if self.p.compression_only:
+        if held:
+            out.append(("spring", self._release_g(y, v, 2.0 * x2, contact)))
+        elif self.p.compression_only:
             xi = x0 + t_abs * (x1 + t_abs * x2)
             xi_dot = x1 + 2.0 * t_abs * x2
             gs = self._spring_g(y, v, xi, xi_dot)
             out.append(("spring", gs if spring_on else -gs))
         return out
 
-    def _first_switch(self, piece, contact, spring_on, x0, x1, x2, t0, h):
+    def _first_switch(self, piece, contact, spring_on, held, x0, x1, x2, t0, h):
         """(time in the step, which flag) of the first switch in (t0, h], or None."""
         n_sub = max(1, math.ceil((h - t0) / (self.shortest_period / _SAMPLES_PER_PERIOD)))
 
         def funcs(t):
-            return self._switch_functions(piece, t - t0, contact, spring_on, x0, x1, x2, t)
+            return self._switch_functions(piece, t - t0, contact, spring_on, held, x0, x1, x2, t)
 
         t_prev = t0
         for k in range(1, n_sub + 1):

@@ -64,11 +64,13 @@ class PunchContactSlave(SewSlave):
     def _state_now(self) -> PunchState:
         # before initialization ends, the punch rests on its excitation (setup position)
         if self._state is None:
-            return self.model().initial_state(self._inputs["xi"], self._inputs["xi_dot"])
+            return self.model().initial_state(self._inputs["xi"], self._inputs["xi_dot"],
+                                              self._inputs["xi_ddot"])
         return self._state
 
     def initialize(self, model):
-        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"])
+        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"],
+                                          self._inputs["xi_ddot"])
 
     def advance(self, model, t, h):
         # Taylor polynomial of the excitation about the start of this step
@@ -77,7 +79,7 @@ class PunchContactSlave(SewSlave):
 
     def current_outputs(self):
         u = self.extrapolated_inputs(self._elapsed)
-        o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"])
+        o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"], u["xi_ddot"])
         return fields_of(o)
 
     def save_internal(self):

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from components.parameters import with_values
 from components.punch_contact import GRAVITY, PunchContactParams
@@ -28,6 +29,7 @@ class ReferenceSolution:
     F2: np.ndarray
     F3: np.ndarray
     contact: np.ndarray
+    held: np.ndarray           # the punch rides on the stop of a preloaded compression-only spring
     switch_times: list[float]
     n_rhs: int
 
@@ -45,10 +47,10 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
     def excitation(t):
         phi, omega, eps = sh.state(t)
         e = lk.excitation(phi, omega, eps)
-        return float(e.xi), float(e.xi_dot)
+        return float(e.xi), float(e.xi_dot), float(e.xi_ddot)
 
     def forces(t, y, v, contact, spring_on):
-        xi, xi_dot = excitation(t)
+        xi, xi_dot, _ = excitation(t)
         f1 = p.F10 + p.c1 * y + p.b1 * v
         f2 = -(p.c2 * y + p.b2 * v) if contact else 0.0
         f3 = p.F30 + p.c3 * (xi - y) + p.b3 * (xi_dot - v) if spring_on else 0.0
@@ -58,18 +60,34 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
         return max(s[0], p.c2 * s[0] + p.b2 * s[1])
 
     def spring_g(t, s):                # < 0 inside {Delta > 0 and F3* > 0}
-        xi, xi_dot = excitation(t)
+        xi, xi_dot, _ = excitation(t)
         delta = xi - s[0]
         return max(-delta, -(p.F30 + p.c3 * delta + p.b3 * (xi_dot - s[1])))
 
-    xi0, xi_dot0 = excitation(0.0)
+    xi0, xi_dot0, _ = excitation(0.0)
     state = np.array([xi0, 0.0])
     contact = False
     spring_on = True if not p.compression_only else spring_g(0.0, state) < 0
+    held = _holds(p, 0.0, state, contact, spring_on, excitation)
     t0 = 0.0
-    pieces = []            # (t_start, t_end, dense solution, contact, spring_on)
+    pieces = []            # (t_start, t_end, dense solution, contact, spring_on, held)
     switches = []
     while t0 < t_end:
+        if held:
+            t1, released = _ride_on_stop(p, t0, t_end, contact, excitation)
+            pieces.append((t0, t1, _riding(excitation), contact, True, True))
+            xi, xi_dot, xi_ddot = excitation(t1)
+            state = np.array([xi, xi_dot])
+            t0 = t1
+            if released == "contact":
+                switches.append(t0)
+                contact = not contact
+            elif released == "stop":
+                switches.append(t0)
+                held = False
+                spring_on = _stop_force(p, xi, xi_dot, xi_ddot, contact) > p.F30
+            continue
+
         def rhs(t, s, contact=contact, spring_on=spring_on):
             nonlocal n_rhs
             n_rhs += 1
@@ -89,7 +107,7 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
                         events=events, dense_output=True)
         if not sol.success:
             raise RuntimeError(f"reference solver failed at t = {sol.t[-1]:g} s: {sol.message}")
-        pieces.append((t0, sol.t[-1], sol.sol, contact, spring_on))
+        pieces.append((t0, sol.t[-1], sol.sol, contact, spring_on, False))
         state = sol.y[:, -1].copy()
         t0 = float(sol.t[-1])
         if sol.status == 1:                        # a switch
@@ -98,8 +116,72 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
                 contact = not contact
             else:
                 spring_on = not spring_on
+                held = _holds(p, t0, state, contact, spring_on, excitation)
     return _sample(pieces, t_end, sample_step, sample_from, sh, lk, p,
                    switches if sample_switches else [], n_rhs)
+
+
+# --- the punch held on the stop of a preloaded compression-only spring 11 ------------------------
+# (MECHANISMS.md §1b gives F3 a jump from 0 to F30 at Delta = 0; components/punch_contact.py
+# explains why the punch is then held on the stop. Written here again for the reference.)
+
+def _stop_force(p, y, v, xi_ddot, contact):
+    """The stop force that makes the punch move with the slider."""
+    f1 = p.F10 + p.c1 * y + p.b1 * v
+    f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+    return p.m * (xi_ddot + GRAVITY) + f1 - f2
+
+
+def _holds(p, t, state, contact, spring_on, excitation) -> bool:
+    """At a crossing of the stop: the stop can hold the punch, and the excursion the new mode
+    starts (2·|Delta'| / |Delta''|) is below 1/16 of the shortest natural period."""
+    if not (p.compression_only and p.F30 > 0.0):
+        return False
+    xi, xi_dot, xi_ddot = excitation(t)
+    y, v = state
+    f3_star = p.F30 + p.c3 * (xi - y) + p.b3 * (xi_dot - v)
+    if f3_star < 0.5 * p.F30 or not 0.0 <= _stop_force(p, xi, xi_dot, xi_ddot, contact) <= p.F30:
+        return False
+    f1 = p.F10 + p.c1 * y + p.b1 * v
+    f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+    a = (-f1 + f2 + (f3_star if spring_on else 0.0)) / p.m - GRAVITY
+    period = 2.0 * math.pi * math.sqrt(p.m / (p.c1 + p.c2 + p.c3))
+    return 2.0 * abs(xi_dot - v) <= abs(xi_ddot - a) * period / 16
+
+
+def _ride_on_stop(p, t0, t_end, contact, excitation):
+    """(time, reason) where riding on the stop ends: 'contact' (the fabric contact switches),
+    'stop' (the stop force leaves [0, F30]) or None at t_end. Scans in 10 µs and refines by
+    brentq."""
+    def release(t):
+        xi, xi_dot, xi_ddot = excitation(t)
+        f = _stop_force(p, xi, xi_dot, xi_ddot, contact)
+        return max(f - p.F30, -f)
+
+    def touch(t):
+        xi, xi_dot, _ = excitation(t)
+        g = max(xi, p.c2 * xi + p.b2 * xi_dot)
+        return g if contact else -g
+
+    if release(t0) > 0.0:                 # e.g. the fabric took over the load at a landing
+        return t0, "stop"
+    scan = 1e-5
+    t_prev = t0
+    while t_prev < t_end:
+        t = min(t_prev + scan, t_end)
+        hits = [(brentq(f, t_prev, t, xtol=1e-15, rtol=4 * np.finfo(float).eps), name)
+                for f, name in ((touch, "contact"), (release, "stop")) if f(t) > 0.0]
+        if hits:
+            return min(hits)
+        t_prev = t
+    return t_end, None
+
+
+def _riding(excitation):
+    """Dense 'solution' of a held piece: (y, y') = (xi, xi') at the given times."""
+    def dense(times):
+        return np.array([excitation(float(t))[:2] for t in np.atleast_1d(times)]).T
+    return dense
 
 
 def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches,
@@ -113,14 +195,21 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
     v = np.empty_like(times)
     contact = np.zeros(times.shape, dtype=bool)
     spring_on = np.zeros(times.shape, dtype=bool)
-    for start, end, dense, c, s_on in pieces:
+    held = np.zeros(times.shape, dtype=bool)
+    for start, end, dense, c, s_on, on_stop in pieces:
         mask = (times >= start) & (times <= end)
         if mask.any():
             y[mask], v[mask] = dense(times[mask])
             contact[mask] = c
             spring_on[mask] = s_on
+            held[mask] = on_stop
     motion = np.array([shaft.state(t) for t in times])
     e = linkage.excitation(motion[:, 0], motion[:, 1], motion[:, 2])
     f2 = np.where(contact, np.maximum(-(p.c2 * y + p.b2 * v), 0.0), 0.0)
     f3 = np.where(spring_on, p.F30 + p.c3 * (e.xi - y) + p.b3 * (e.xi_dot - v), 0.0)
-    return ReferenceSolution(times, motion[:, 0], y, v, f2, f3, contact, list(switches), n_rhs)
+    if p.compression_only:
+        f3 = np.maximum(f3, 0.0)
+    f1 = p.F10 + p.c1 * y + p.b1 * v
+    f3 = np.where(held, p.m * (e.xi_ddot + GRAVITY) + f1 - f2, f3)
+    return ReferenceSolution(times, motion[:, 0], y, v, f2, f3, contact, held, list(switches),
+                             n_rhs)

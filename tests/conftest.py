@@ -1,7 +1,16 @@
 """Shared fixtures: the FMUs built once per test session into a temporary folder."""
+import os
+
 import pytest
+from hypothesis import settings
 
 from components.build import build_all
+
+# Property tests draw the same examples on every run ("ci", the default), so that a red CI names a
+# real, reproducible failure; HYPOTHESIS_PROFILE=explore draws new ones, many more of them.
+settings.register_profile("ci", max_examples=25, derandomize=True, database=None, deadline=None)
+settings.register_profile("explore", max_examples=1000, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="session")

@@ -101,3 +101,92 @@ def test_compression_only_spring_does_not_pull_the_punch_down():
 def test_bad_parameters_are_refused_by_name(name, value):
     with pytest.raises(ParameterError, match=f"parameter {name}"):
         PunchContact(PunchContactParams(**{name: value}))
+
+
+# --- a preloaded compression-only spring 11: the punch held on its stop -------------------------
+def _on_stop_params(**kw):
+    return PunchContactParams(compression_only=1, **{"F30": 12.0, "F10": 5.0, **kw})
+
+
+def test_held_punch_follows_the_slider_and_the_stop_carries_the_closed_form_force():
+    """Slider descending at constant speed: the punch rides on the stop (y = xi) and the stop
+    carries F1 + m·g (xi'' = 0, no fabric); at the landing (y = 0, t = xi0/0.4 in closed form)
+    the fabric's jump b2·0.4 exceeds that load, so the punch leaves the stop there."""
+    p = _on_stop_params()
+    model = PunchContact(p)
+    xi0, speed, h = 3.0e-3, -0.4, 2.5e-4
+    s = model.initial_state(xi0, 0.0)
+    assert s.held                       # 5 + 2000·3e-3 + 0.62 N lies in [0, 12] N
+    t = 0.0
+    t_land = xi0 / -speed
+    while t + h < t_land:
+        xi = xi0 + speed * t
+        s = model.step(s, xi, speed, 0.0, h)
+        t += h
+        out = model.outputs(s, xi + speed * h, speed)
+        assert s.held and out.y == pytest.approx(xi0 + speed * t, abs=1e-15)
+        f_closed = p.F10 + p.c1 * out.y + p.b1 * speed + p.m * GRAVITY
+        assert out.F3 == pytest.approx(f_closed, rel=1e-12)
+        assert out.y_ddot == 0.0 and out.Delta == pytest.approx(0.0, abs=1e-15)
+    # the step that contains the landing: contact on, stop released, the state after it from
+    # scipy (fabric contact, spring 11 off) started at the closed-form landing instant
+    s = model.step(s, xi0 + speed * t, speed, 0.0, h)
+    assert s.contact and not s.held and not s.spring_on and s.landings == 1
+
+    def rhs(tt, st):
+        f = -p.F10 - p.c1 * st[0] - p.b1 * st[1] - p.c2 * st[0] - p.b2 * st[1]
+        return [st[1], f / p.m - GRAVITY]
+    ref = solve_ivp(rhs, (t_land, t + h), [0.0, speed], method="DOP853", rtol=1e-12, atol=1e-15)
+    assert s.y == pytest.approx(ref.y[0, -1], abs=1e-12)
+    assert s.y_dot == pytest.approx(ref.y[1, -1], abs=1e-8)
+
+
+def test_held_punch_is_released_into_the_spring_when_the_stop_force_passes_F30():
+    """Slider accelerating upward from rest: the stop force m·(a + g) + F10 + c1·xi + b1·xi'
+    grows to F30 at a closed-form instant; from there spring 11 compresses (scipy, spring on)."""
+    p = _on_stop_params()
+    model = PunchContact(p)
+    xi0, acc, h = 2.0e-3, 20.0, 5e-4
+    s = model.initial_state(xi0, 0.0, acc)
+    assert s.held
+    # m·(acc + g) + F10 + c1·(xi0 + acc·t²/2) + b1·acc·t = F30
+    c2_, c1_, c0_ = p.c1 * acc / 2, p.b1 * acc, p.m * (acc + GRAVITY) + p.F10 + p.c1 * xi0 - p.F30
+    t_release = (-c1_ + np.sqrt(c1_ ** 2 - 4 * c2_ * c0_)) / (2 * c2_)
+    n = int(np.ceil(t_release / h)) + 3
+    for k in range(n):
+        t = k * h
+        s = model.step(s, xi0 + acc * t * t / 2, acc * t, acc / 2, h)
+        assert s.held == ((k + 1) * h < t_release)
+    assert s.spring_on and not s.contact
+
+    def rhs(tt, st):
+        xi, xi_dot = xi0 + acc * tt * tt / 2, acc * tt
+        f = (-p.F10 - p.c1 * st[0] - p.b1 * st[1] + p.F30 + p.c3 * (xi - st[0])
+             + p.b3 * (xi_dot - st[1]))
+        return [st[1], f / p.m - GRAVITY]
+    start = [xi0 + acc * t_release ** 2 / 2, acc * t_release]
+    ref = solve_ivp(rhs, (t_release, n * h), start, method="DOP853", rtol=1e-12, atol=1e-15)
+    assert s.y == pytest.approx(ref.y[0, -1], abs=1e-12)
+    assert s.y_dot == pytest.approx(ref.y[1, -1], abs=1e-8)
+    assert model.outputs(s, xi0 + acc * (n * h) ** 2 / 2, acc * n * h).Delta > 0.0
+
+
+def test_punch_bouncing_on_the_stop_comes_to_rest_instead_of_chattering():
+    """The case the property test found (a light punch on a stiff, damped, preloaded stop): the
+    exact motion micro-bounces on the stop, a switch every few µs. The model holds the punch on
+    the stop instead; the exact bouncing (the same model with the stop disabled, which still
+    fits in the switch budget over these steps) stays within 0.2 µm and 5 mm/s of it."""
+    p = PunchContactParams(m=0.0078125, c1=5965.0, c2=1000.0, c3=64466.0, F10=0.0, b1=0.0,
+                           b2=0.0, b3=19.0, F30=12.0, compression_only=1)
+    model, bouncing = PunchContact(p), PunchContact(p)
+    bouncing.has_stop = False
+    s = model.initial_state(3e-3, -0.4)
+    b = bouncing.initial_state(3e-3, -0.4)
+    h, speed = 5e-4, -0.4
+    for k in range(12):
+        s = model.step(s, 3e-3 + speed * k * h, speed, 0.0, h)
+        b = bouncing.step(b, 3e-3 + speed * k * h, speed, 0.0, h)
+        assert abs(s.y - b.y) < 2e-7 and abs(s.y_dot - b.y_dot) < 5e-3
+    assert s.held and s.y == pytest.approx(3e-3 + speed * 12 * h, abs=1e-15)
+    assert s.y_dot == speed
+    assert not b.held
