@@ -124,8 +124,7 @@ class PunchContact:
     # --- forces ------------------------------------------------------------------------------
     def outputs(self, s: PunchState, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchOutputs:
         p = self.p
-        f1 = p.F10 + p.c1 * s.y + p.b1 * s.y_dot
-        f2 = max(0.0, -(p.c2 * s.y + p.b2 * s.y_dot)) if s.contact else 0.0
+        f1, f2 = self._spring6_and_fabric(s.y, s.y_dot, s.contact)
         delta = xi - s.y
         if s.held:                   # the stop carries whatever keeps the punch on the slider
             f3 = self._stop_force(s.y, s.y_dot, xi_ddot, s.contact)
@@ -139,12 +138,20 @@ class PunchContact:
         a = (-f1 + f2 + f3) / p.m - GRAVITY
         return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact, max(s.F2_max, f2))
 
+    def _spring6_and_fabric(self, y, v, contact) -> tuple[float, float]:
+        """(F1, F2): the closing spring's force and the fabric's (>= 0, only in contact)."""
+        p = self.p
+        f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+        return p.F10 + p.c1 * y + p.b1 * v, f2
+
     def _stop_force(self, y, v, xi_ddot, contact) -> float:
         """Force of spring 11's stop that makes the punch move with the slider (y'' = xi'')."""
-        p = self.p
-        f1 = p.F10 + p.c1 * y + p.b1 * v
-        f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
-        return p.m * (xi_ddot + GRAVITY) + f1 - f2
+        f1, f2 = self._spring6_and_fabric(y, v, contact)
+        return self.p.m * (xi_ddot + GRAVITY) + f1 - f2
+
+    def _compresses_on_release(self, y, v, xi_ddot, contact) -> bool:
+        """Leaving the stop: into spring 11 (stop force above F30) or off the slider (below 0)."""
+        return self._stop_force(y, v, xi_ddot, contact) > self.p.F30
 
     # --- switching functions: negative while the current flag is consistent -------------------
     def _contact_g(self, y, v):
@@ -181,8 +188,7 @@ class PunchContact:
             return False
         if not 0.0 <= self._stop_force(xi, xi_dot, xi_ddot, contact) <= p.F30:
             return False
-        f1 = p.F10 + p.c1 * y + p.b1 * v
-        f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+        f1, f2 = self._spring6_and_fabric(y, v, contact)
         a = (-f1 + f2 + (f3_star if spring_on else 0.0)) / p.m - GRAVITY
         excursion_speed = abs(xi_dot - v)
         return 2.0 * excursion_speed <= abs(xi_ddot - a) * self.shortest_period / _SAMPLES_PER_PERIOD
@@ -197,7 +203,7 @@ class PunchContact:
             # and leaves the stop at once if the stop cannot hold it under them
             y, v = x0, x1
             if self._release_g(y, v, 2.0 * x2, contact) > 0.0:
-                held, spring_on = False, self._stop_force(y, v, 2.0 * x2, contact) > self.p.F30
+                held, spring_on = False, self._compresses_on_release(y, v, 2.0 * x2, contact)
         elif self.p.compression_only:
             # new inputs may have moved the slider: re-decide whether spring 11 bears
             spring_on = self._spring_g(y, v, x0, x1) < 0.0
@@ -205,8 +211,9 @@ class PunchContact:
         f2_max = 0.0
         # a guard against an endless loop; every excursion that is not held spans a good part of
         # a search sub-interval, so the count scales with them
-        n_sub = math.ceil(h / (self.shortest_period / _SAMPLES_PER_PERIOD))
-        for _ in range(_MAX_SWITCHES_PER_STEP + 4 * n_sub):
+        budget = _MAX_SWITCHES_PER_STEP + 4 * math.ceil(h * _SAMPLES_PER_PERIOD
+                                                        / self.shortest_period)
+        for _ in range(budget):
             piece = self._piece(y, v, contact, spring_on, held, x0, x1, x2, t0)
             event = self._first_switch(piece, contact, spring_on, held, x0, x1, x2, t0, h)
             t_end = h if event is None else event[0]
@@ -224,15 +231,14 @@ class PunchContact:
                 landings += contact
             elif held:
                 held = False
-                spring_on = self._stop_force(y, v, xi_ddot, contact) > self.p.F30
+                spring_on = self._compresses_on_release(y, v, xi_ddot, contact)
             else:
                 spring_on = not spring_on
                 xi, xi_dot = x0 + t0 * (x1 + t0 * x2), x1 + 2.0 * t0 * x2
                 if self._sticks(y, v, xi, xi_dot, xi_ddot, contact, spring_on):
                     held, spring_on, y, v = True, True, xi, xi_dot
-        raise ZenoError(f"more than {_MAX_SWITCHES_PER_STEP + 4 * n_sub} contact switches within "
-                        f"one step of {h:g} s (y = {y:.6g} m): the contact chatters; check c2, b2, "
-                        f"c3, b3")
+        raise ZenoError(f"more than {budget} contact switches within one step of {h:g} s "
+                        f"(y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
 
     def _largest_F2(self, piece, length: float) -> float:
         """Largest fabric force -(c2·y + b2·y') on a contact piece of the given length."""
