@@ -101,14 +101,24 @@ def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
 
 
 # --- state: the master rolls back, every FMU restores (and serializes) exactly ------------------
-@pytest.mark.parametrize("scenario", ["punch_drive", "takeup", "feed", "carriage_startstop"])
-def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario):
+ON_STOP = {"punch.compression_only": 1, "punch.F30": 30.0}     # the punch held on spring 11's stop
+
+
+@pytest.mark.parametrize("scenario, settings", [
+    ("punch_drive", {}), ("punch_drive", ON_STOP), ("takeup", {}), ("feed", {}),
+    ("carriage_startstop", {})])
+def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, settings):
     sc = load(scenario)
     sc.set_value("experiment.revolutions", 2)
+    for name, value in settings.items():
+        sc.set_value(name, value)
     with JacobiMaster(sc, fmu_paths) as master:
-        for _ in range(master.n_steps // 4):
+        for _ in range(master.n_steps // 8):           # a quarter revolution
             master.step()
         saved = master.save_state()
+        if settings is ON_STOP:                         # saved while riding on the stop
+            f3, delta = master.result()["punch.F3"][-1], master.result()["punch.Delta"][-1]
+            assert 0.0 < f3 < 30.0 and abs(delta) < 1e-7, (f3, delta)
         for _ in range(master.n_steps // 4):
             master.step()
         first = master.result()
@@ -122,20 +132,23 @@ def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario):
 
 def test_every_fmu_state_survives_serialization(fmu_paths):
     """Serialize each FMU's state to bytes, run on, restore from the bytes: the same steps."""
-    for scenario in ("punch_drive", "carriage_startstop", "takeup", "feed"):
+    for scenario, settings in (("punch_drive", {}), ("punch_drive", ON_STOP),
+                               ("carriage_startstop", {}), ("takeup", {}), ("feed", {})):
         sc = load(scenario)
         sc.set_value("experiment.revolutions", 1)
+        for name, value in settings.items():
+            sc.set_value(name, value)
         with JacobiMaster(sc, fmu_paths) as master:
-            for _ in range(master.n_steps // 3):
+            for _ in range(master.n_steps // 4):                # on the stop, with ON_STOP
                 master.step()
             blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.units]
             k, row = master.k, master._row
-            for _ in range(master.n_steps // 3):
+            for _ in range(master.n_steps // 4):
                 master.step()
             first = master.result()
             master.restore_state((k, row, [u.fmu.deSerializeFMUstate(b)
                                            for u, b in zip(master.units, blobs)]))
-            for _ in range(master.n_steps // 3):
+            for _ in range(master.n_steps // 4):
                 master.step()
             second = master.result()
         for name in first.columns:
