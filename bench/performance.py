@@ -29,6 +29,7 @@ from scenarios.runner import reference_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
+import math
 from scenarios import punch, punch_reference
 t_end = 10 * 2 * math.pi / 100.0
 ref = punch_reference.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,

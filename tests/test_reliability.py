@@ -104,19 +104,19 @@ def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
 ON_STOP = {"punch.compression_only": 1, "punch.F30": 30.0}     # the punch held on spring 11's stop
 
 
-@pytest.mark.parametrize("scenario, settings", [
+@pytest.mark.parametrize("scenario, overrides", [
     ("punch_drive", {}), ("punch_drive", ON_STOP), ("takeup", {}), ("feed", {}),
     ("carriage_startstop", {})])
-def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, settings):
+def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, overrides):
     sc = load(scenario)
     sc.set_value("experiment.revolutions", 2)
-    for name, value in settings.items():
+    for name, value in overrides.items():
         sc.set_value(name, value)
     with JacobiMaster(sc, fmu_paths) as master:
         for _ in range(master.n_steps // 8):           # a quarter revolution
             master.step()
         saved = master.save_state()
-        if settings is ON_STOP:                         # saved while riding on the stop
+        if overrides is ON_STOP:                         # saved while riding on the stop
             f3, delta = master.result()["punch.F3"][-1], master.result()["punch.Delta"][-1]
             assert 0.0 < f3 < 30.0 and abs(delta) < 1e-7, (f3, delta)
         for _ in range(master.n_steps // 4):
@@ -132,11 +132,11 @@ def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, s
 
 def test_every_fmu_state_survives_serialization(fmu_paths):
     """Serialize each FMU's state to bytes, run on, restore from the bytes: the same steps."""
-    for scenario, settings in (("punch_drive", {}), ("punch_drive", ON_STOP),
-                               ("carriage_startstop", {}), ("takeup", {}), ("feed", {})):
+    for scenario, overrides in (("punch_drive", {}), ("punch_drive", ON_STOP),
+                                ("carriage_startstop", {}), ("takeup", {}), ("feed", {})):
         sc = load(scenario)
         sc.set_value("experiment.revolutions", 1)
-        for name, value in settings.items():
+        for name, value in overrides.items():
             sc.set_value(name, value)
         with JacobiMaster(sc, fmu_paths) as master:
             for _ in range(master.n_steps // 4):                # on the stop, with ON_STOP
