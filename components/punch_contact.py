@@ -119,7 +119,8 @@ class PunchContact:
         """At rest on the excitation (Delta = 0), with the switches consistent with that state."""
         contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot)
         held = self._sticks(xi, 0.0, xi, xi_dot, xi_ddot, contact, spring_on)
-        return PunchState(xi, 0.0, contact, spring_on or held, held=held)
+        # held, the punch moves with the slider from the start (xi' is small then, by _sticks)
+        return PunchState(xi, xi_dot if held else 0.0, contact, spring_on or held, held=held)
 
     # --- forces ------------------------------------------------------------------------------
     def outputs(self, s: PunchState, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchOutputs:
