@@ -3,7 +3,9 @@
 Independent of the co-simulation on purpose: the excitation is the linkage's exact kinematics at
 the shaft angle phi(t) (no Taylor extrapolation), the force law is written here again from
 MECHANISMS.md §1b, and the punch is integrated numerically (solve_ivp, DOP853 by default) with
-the contact and spring switches located as terminal events, restarting in the new mode.
+the contact and spring switches located as terminal events, restarting in the new mode. Where a
+preloaded compression-only spring 11 holds the punch on its stop, the punch moves with the exact
+excitation until the stop force leaves [0, F30] (found by scanning and brentq).
 """
 from __future__ import annotations
 
