@@ -24,12 +24,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from .oscillator import DampedOscillator
 from .parameters import FRACTION, NONNEGATIVE, ParameterError, parameter, validate
 
-_GAUSS_POINTS = 8            # per segment; the shapes are cubic pieces: exact for ∫ N·Nᵀ
+Vector = tuple[float, float]
+Matrix = tuple[Vector, Vector]          # rows
 
 
 @dataclass(frozen=True)
@@ -44,25 +43,47 @@ class CarriageParams:
                             NONNEGATIVE)
 
 
-def unit_deflection(z, s, EJ):
+def unit_deflection(z: float, s: float, EJ: float) -> tuple[float, float]:
     """Deflection at z of a cantilever clamped at 0 under a unit force at s, and its second
     derivative (curvature)."""
-    z = np.asarray(z, dtype=float)
-    inner = z <= s
-    w = np.where(inner, z * z * (3 * s - z), s * s * (3 * z - s)) / (6 * EJ)
-    w2 = np.where(inner, (s - z), 0.0) / EJ
-    return w, w2
+    if z <= s:
+        return z * z * (3 * s - z) / (6 * EJ), (s - z) / EJ
+    return s * s * (3 * z - s) / (6 * EJ), 0.0
 
 
-def flexibility(p: CarriageParams) -> np.ndarray:
+def flexibility(p: CarriageParams) -> Matrix:
     """The cantilever's flexibility matrix at z = a and z = l (closed form)."""
     a, l, EJ = p.a, p.l, p.EJ
     f_al = a * a * (3 * l - a) / (6 * EJ)
-    return np.array([[a ** 3 / (3 * EJ), f_al], [f_al, l ** 3 / (3 * EJ)]])
+    return ((a ** 3 / (3 * EJ), f_al), (f_al, l ** 3 / (3 * EJ)))
+
+
+def _inverse(A: Matrix) -> Matrix:
+    det = A[0][0] * A[1][1] - A[0][1] * A[1][0]
+    return ((A[1][1] / det, -A[0][1] / det), (-A[1][0] / det, A[0][0] / det))
+
+
+def _times(A: Matrix, x: Vector) -> Vector:
+    return (A[0][0] * x[0] + A[0][1] * x[1], A[1][0] * x[0] + A[1][1] * x[1])
+
+
+def _gauss_points(lo: float, hi: float):
+    """4-point Gauss–Legendre nodes and weights on [lo, hi] (closed form): exact up to degree 7,
+    and the products of the cubic shapes are of degree 6."""
+    half, mid = 0.5 * (hi - lo), 0.5 * (hi + lo)
+    for x, w in _GAUSS_4:
+        yield mid + half * x, half * w
+
+
+_GAUSS_4 = tuple((sign * math.sqrt(3 / 7 + k * 2 / 7 * math.sqrt(6 / 5)),
+                  (18 - k * math.sqrt(30)) / 36) for k in (-1, 1) for sign in (-1, 1))
 
 
 class CarriageModal:
-    """Mass, stiffness, load vector, modes, and the exact step of the base-excited carriage."""
+    """Mass, stiffness, load vector, modes, and the exact step of the base-excited carriage.
+
+    Matrices are tuples of rows, vectors tuples: 2×2 closed forms, standard library only (this
+    code runs inside the FMU)."""
 
     def __init__(self, params: CarriageParams = CarriageParams()):
         validate(params)
@@ -70,75 +91,106 @@ class CarriageModal:
             raise ParameterError("a", f"must lie on the cantilever, 0 < a < l = {params.l} m, "
                                       f"got {params.a}")
         self.p = params
-        self.K = np.linalg.inv(flexibility(params))
+        self.F = flexibility(params)
+        self.K = _inverse(self.F)
         self.M, self.load = self._mass_and_load()
-        # modes: K·φ = ω²·M·φ, mass-normalized (Φᵀ·M·Φ = I)
-        lam, phi = _generalized_eigh(self.K, self.M)
-        self.omega = np.sqrt(lam)
-        self.modes = phi
-        self.modal_load = phi.T @ self.load           # γ_i = φ_iᵀ·p
+        # modes: K·φ = ω²·M·φ, mass-normalized (Φᵀ·M·Φ = I); columns of `modes` are the φ_i
+        lam, self.modes = _generalized_eigen(self.K, self.M)
+        self.omega = tuple(math.sqrt(x) for x in lam)
+        self.modal_load = tuple(self.modes[0][i] * self.load[0] + self.modes[1][i] * self.load[1]
+                                for i in range(2))            # γ_i = φ_iᵀ·p
 
     # --- Ritz shapes ---------------------------------------------------------------------------
-    def shapes(self, z):
-        """N1(z), N2(z) and their second derivatives, arrays of shape (2, len(z))."""
-        p = self.p
+    def shapes(self, z: float) -> tuple[Vector, Vector]:
+        """(N1(z), N2(z)) and their second derivatives."""
+        p, K = self.p, self.K
         wa, wa2 = unit_deflection(z, p.a, p.EJ)
         wl, wl2 = unit_deflection(z, p.l, p.EJ)
-        return self.K.T @ np.vstack([wa, wl]), self.K.T @ np.vstack([wa2, wl2])
+        # N = Kᵀ·(w_a, w_l): the deflection line through U1 at a and U2 at l
+        return ((K[0][0] * wa + K[1][0] * wl, K[0][1] * wa + K[1][1] * wl),
+                (K[0][0] * wa2 + K[1][0] * wl2, K[0][1] * wa2 + K[1][1] * wl2))
 
     def _quadrature(self):
         """Gauss points and weights on [0, a] and [a, l] (the shapes are cubic on each)."""
-        x, w = np.polynomial.legendre.leggauss(_GAUSS_POINTS)
-        zs, ws = [], []
-        for lo, hi in ((0.0, self.p.a), (self.p.a, self.p.l)):
-            zs.append(0.5 * (hi - lo) * x + 0.5 * (hi + lo))
-            ws.append(0.5 * (hi - lo) * w)
-        return np.concatenate(zs), np.concatenate(ws)
+        return [*_gauss_points(0.0, self.p.a), *_gauss_points(self.p.a, self.p.l)]
 
-    def _mass_and_load(self):
+    def _mass_and_load(self) -> tuple[Matrix, Vector]:
         p = self.p
-        z, w = self._quadrature()
-        n, _ = self.shapes(z)
-        beam = p.m_n / p.l * (n * w) @ n.T
-        e1, e2 = np.array([1.0, 0.0]), np.array([0.0, 1.0])
-        tilt = (e2 - e1) / (p.l - p.a)
-        M = beam + p.m_k * np.outer(e2, e2) + p.J_c * np.outer(tilt, tilt)
-        load = p.m_n / p.l * (n * w).sum(axis=1) + p.m_k * e2
+        beam = [[0.0, 0.0], [0.0, 0.0]]
+        integral = [0.0, 0.0]
+        for z, w in self._quadrature():
+            n, _ = self.shapes(z)
+            for i in range(2):
+                integral[i] += w * n[i]
+                for j in range(2):
+                    beam[i][j] += w * n[i] * n[j]
+        rho = p.m_n / p.l
+        tilt = p.J_c / (p.l - p.a) ** 2          # J_c·((U2 − U1)/(l − a))²: the carriage's tilt
+        M = ((rho * beam[0][0] + tilt, rho * beam[0][1] - tilt),
+             (rho * beam[1][0] - tilt, rho * beam[1][1] + tilt + p.m_k))
+        load = (rho * integral[0], rho * integral[1] + p.m_k)
         return M, load
 
-    def energy_stiffness(self) -> np.ndarray:
+    def energy_stiffness(self) -> Matrix:
         """EJ·∫ N''·N''ᵀ dz: the stiffness from the strain energy of the shapes (equals K)."""
-        z, w = self._quadrature()
-        _, n2 = self.shapes(z)
-        return self.p.EJ * (n2 * w) @ n2.T
+        k = [[0.0, 0.0], [0.0, 0.0]]
+        for z, w in self._quadrature():
+            _, n2 = self.shapes(z)
+            for i in range(2):
+                for j in range(2):
+                    k[i][j] += self.p.EJ * w * n2[i] * n2[j]
+        return (tuple(k[0]), tuple(k[1]))
 
     # --- base-excited motion -------------------------------------------------------------------
-    def static_deflection(self, a_base: float) -> np.ndarray:
-        """U under a constant base acceleration: K·U = −p·a."""
-        return -np.linalg.solve(self.K, self.load) * a_base
+    def static_deflection(self, a_base: float) -> Vector:
+        """U under a constant base acceleration: K·U = −p·a, so U = −F·p·a."""
+        u = _times(self.F, self.load)
+        return (-u[0] * a_base, -u[1] * a_base)
 
-    def step(self, q: np.ndarray, dq: np.ndarray, a0: float, a1: float, h: float):
+    def modal(self, U: Vector) -> Vector:
+        """Modal coordinates of the deflections U: q = Φᵀ·M·U (Φ is mass-normalized)."""
+        mu = _times(self.M, U)
+        return tuple(self.modes[0][i] * mu[0] + self.modes[1][i] * mu[1] for i in range(2))
+
+    def step(self, q: Vector, dq: Vector, a0: float, a1: float, h: float) -> tuple[Vector, Vector]:
         """Modal coordinates q, q' after h under a(τ) = a0 + a1·τ: each mode exactly."""
-        q_new, dq_new = np.empty(2), np.empty(2)
+        new = []
         for i in range(2):
             w = self.omega[i]
             g = -self.modal_load[i]
             mode = DampedOscillator(1.0, 2.0 * self.p.zeta * w, w * w, g * a0, g * a1, 0.0,
                                     q[i], dq[i])
-            q_new[i], dq_new[i] = mode.state(h)
-        return q_new, dq_new
+            new.append(mode.state(h))
+        return (new[0][0], new[1][0]), (new[0][1], new[1][1])
 
-    def physical(self, q: np.ndarray, dq: np.ndarray):
+    def physical(self, q: Vector, dq: Vector) -> tuple[Vector, Vector]:
         """U and U' from the modal coordinates."""
-        return self.modes @ q, self.modes @ dq
+        return _times(self.modes, q), _times(self.modes, dq)
 
 
-def _generalized_eigh(K, M):
-    """Eigenpairs of K·φ = λ·M·φ, ascending, mass-normalized (2×2, via Cholesky of M)."""
-    L = np.linalg.cholesky(M)
-    Li = np.linalg.inv(L)
-    lam, y = np.linalg.eigh(Li @ K @ Li.T)
-    return lam, Li.T @ y
+def _generalized_eigen(K: Matrix, M: Matrix) -> tuple[Vector, Matrix]:
+    """Eigenpairs of K·φ = λ·M·φ (K, M symmetric, M positive definite), λ ascending, φ
+    mass-normalized and its largest component positive; closed form: det(K − λ·M) = 0 is a
+    quadratic in λ."""
+    a = M[0][0] * M[1][1] - M[0][1] ** 2
+    b = -(K[0][0] * M[1][1] + K[1][1] * M[0][0] - 2.0 * K[0][1] * M[0][1])
+    c = K[0][0] * K[1][1] - K[0][1] ** 2
+    root = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    # the larger root without cancellation, the smaller from the product of the roots
+    big = (-b + root) / (2.0 * a)
+    lams = (c / (a * big), big)
+    vectors = []
+    for lam in lams:
+        r0 = (K[0][0] - lam * M[0][0], K[0][1] - lam * M[0][1])
+        r1 = (K[1][0] - lam * M[1][0], K[1][1] - lam * M[1][1])
+        row = r0 if math.hypot(*r0) >= math.hypot(*r1) else r1
+        v = (-row[1], row[0])                         # orthogonal to the better-conditioned row
+        norm = math.sqrt(v[0] * (M[0][0] * v[0] + M[0][1] * v[1])
+                         + v[1] * (M[1][0] * v[0] + M[1][1] * v[1]))
+        sign = 1.0 if max(v, key=abs) > 0 else -1.0
+        vectors.append((sign * v[0] / norm, sign * v[1] / norm))
+    modes = ((vectors[0][0], vectors[1][0]), (vectors[0][1], vectors[1][1]))
+    return lams, modes
 
 
 # --- the start-stop drive -----------------------------------------------------------------------
@@ -161,27 +213,27 @@ class CarriageDrive:
         self.p = params
         self.x0 = self._position(0.0)
 
-    def _law(self, phi):
+    def _law(self, phi: float) -> tuple[float, float, float, float]:
         """Position and its first three derivatives with respect to φ."""
         p = self.p
         span = 2 * math.pi * p.window
-        rel = np.asarray(phi, dtype=float) - p.phi_start
-        stitch = np.floor(rel / (2 * math.pi))
+        rel = phi - p.phi_start
+        stitch = math.floor(rel / (2 * math.pi))
         u = (rel - 2 * math.pi * stitch) / span
-        moving = u < 1.0
-        u = np.minimum(u, 1.0)
-        c = 2 * math.pi * u
         s = p.stitch_length
-        x = s * (stitch + np.where(moving, u - np.sin(c) / (2 * math.pi), 1.0))
-        d1 = np.where(moving, s * (1 - np.cos(c)) / span, 0.0)
-        d2 = np.where(moving, s * 2 * math.pi * np.sin(c) / span ** 2, 0.0)
-        d3 = np.where(moving, s * (2 * math.pi) ** 2 * np.cos(c) / span ** 3, 0.0)
+        if u >= 1.0:                  # at rest after this stitch's transport window
+            return s * (stitch + 1.0), 0.0, 0.0, 0.0
+        c = 2 * math.pi * u
+        x = s * (stitch + u - math.sin(c) / (2 * math.pi))
+        d1 = s * (1 - math.cos(c)) / span
+        d2 = s * 2 * math.pi * math.sin(c) / span ** 2
+        d3 = s * (2 * math.pi) ** 2 * math.cos(c) / span ** 3
         return x, d1, d2, d3
 
-    def _position(self, phi):
-        return float(self._law(phi)[0])
+    def _position(self, phi: float) -> float:
+        return self._law(phi)[0]
 
-    def motion(self, phi, omega, epsilon):
+    def motion(self, phi: float, omega: float, epsilon: float) -> tuple[float, float, float, float]:
         """x, v, a, jerk of the table for shaft angle, speed and acceleration (the shaft's
         acceleration is taken as constant over the instant: its derivative does not enter)."""
         x, d1, d2, d3 = self._law(phi)

@@ -1,8 +1,6 @@
 """FMUs CarriageDrive and CarriageModal: the semi-automat's start-stop table and its carriage."""
 from __future__ import annotations
 
-import numpy as np
-
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
 from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
 
@@ -61,9 +59,8 @@ class CarriageModalSlave(SewSlave):
 
     def initialize(self, model):
         # at rest in the static deflection under the initial base acceleration
-        u = model.static_deflection(self._inputs["a_base"])
-        self._q = np.linalg.solve(model.modes, u)
-        self._dq = np.zeros(2)
+        self._q = model.modal(model.static_deflection(self._inputs["a_base"]))
+        self._dq = (0.0, 0.0)
 
     def advance(self, model, t, h):
         u = self.extrapolated_inputs(self._elapsed)
@@ -74,7 +71,7 @@ class CarriageModalSlave(SewSlave):
     def current_outputs(self):
         model = self.model()
         if self._q is None:
-            U, dU = model.static_deflection(self._inputs["a_base"]), np.zeros(2)
+            U, dU = model.static_deflection(self._inputs["a_base"]), (0.0, 0.0)
         else:
             U, dU = model.physical(self._q, self._dq)
         return {"U1": float(U[0]), "U2": float(U[1]), "U1_dot": float(dU[0]),
@@ -82,8 +79,8 @@ class CarriageModalSlave(SewSlave):
                 "omega2": float(model.omega[1])}
 
     def save_internal(self):
-        return {} if self._q is None else {"q": self._q.tolist(), "dq": self._dq.tolist()}
+        return {} if self._q is None else {"q": list(self._q), "dq": list(self._dq)}
 
     def restore_internal(self, saved):
-        self._q = np.array(saved["q"]) if saved else None
-        self._dq = np.array(saved["dq"]) if saved else None
+        self._q = tuple(saved["q"]) if saved else None
+        self._dq = tuple(saved["dq"]) if saved else None

@@ -15,8 +15,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from .kinematics import LEFT, RIGHT, Angle, Motion, angle, check_assembly, dyad_rrr, link_angle, \
     point_on_link
 from .parameters import ANY, parameter, validate
@@ -55,19 +53,19 @@ class FeedMotion:
     phi5: Angle
     phi7: Angle
     # transmission angles (rad, in [0, π/2]) of the three dyads, at C, N and F
-    mu_C: np.ndarray
-    mu_N: np.ndarray
-    mu_F: np.ndarray
+    mu_C: float
+    mu_N: float
+    mu_F: float
 
 
-def transmission_angle(joint: Motion, p: Motion, q: Motion):
+def transmission_angle(joint: Motion, p: Motion, q: Motion) -> float:
     """Angle between the two links that meet at `joint` (from P and from Q), folded to [0, 90°]:
     90° transmits force best, 0° is the dead position."""
     ax, ay = p.x - joint.x, p.y - joint.y
     bx, by = q.x - joint.x, q.y - joint.y
-    cos = (ax * bx + ay * by) / np.sqrt((ax * ax + ay * ay) * (bx * bx + by * by))
-    mu = np.arccos(np.clip(cos, -1.0, 1.0))
-    return np.minimum(mu, math.pi - mu)
+    cos = (ax * bx + ay * by) / math.sqrt((ax * ax + ay * ay) * (bx * bx + by * by))
+    mu = math.acos(min(1.0, max(-1.0, cos)))
+    return min(mu, math.pi - mu)
 
 
 class FeedLinkage:

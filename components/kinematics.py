@@ -1,8 +1,10 @@
 """Planar kinematics shared by every linkage: points in motion, cranks, dyads.
 
 A point in motion is a `Motion`: position, velocity and acceleration as separate x and y
-components. Each component is a float or a numpy array of any shape: one call evaluates a whole
-crank revolution at once, and a single crank angle runs on plain floats (fast, for the FMUs).
+components, plain floats. Everything here uses the standard library only (`math`), because this
+code runs inside the FMUs, in whatever Python the FMI host embeds; analyses that want a whole
+crank revolution at once evaluate it sample by sample (scenarios/sampling.py).
+
 Velocities and accelerations come from the differentiated loop-closure equations (never from
 finite differences): for a dyad with |X - P| = r_P and |X - Q| = r_Q,
 
@@ -16,9 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
-
-import numpy as np
+from typing import Callable
 
 LEFT = +1   # X on the left of the directed line P -> Q: (Q - P) × (X - P) > 0
 RIGHT = -1
@@ -28,51 +28,27 @@ class AssemblyError(ValueError):
     """A linkage cannot be assembled: the two links of a dyad cannot reach each other."""
 
 
-def _sqrt(x):
-    return math.sqrt(x) if isinstance(x, float) else np.sqrt(x)
-
-
-def _cos(x):
-    return math.cos(x) if isinstance(x, float) else np.cos(x)
-
-
-def _sin(x):
-    return math.sin(x) if isinstance(x, float) else np.sin(x)
-
-
-def _atan2(y, x):
-    return math.atan2(y, x) if isinstance(y, float) else np.arctan2(y, x)
-
-
 @dataclass(frozen=True)
 class Motion:
     """Position (x, y), velocity (vx, vy) and acceleration (ax, ay) of a point."""
-    x: Any
-    y: Any
-    vx: Any = 0.0
-    vy: Any = 0.0
-    ax: Any = 0.0
-    ay: Any = 0.0
+    x: float
+    y: float
+    vx: float = 0.0
+    vy: float = 0.0
+    ax: float = 0.0
+    ay: float = 0.0
 
 
 @dataclass(frozen=True)
 class Angle:
     """An angle with its first and second time derivatives."""
-    value: Any
-    rate: Any = 0.0
-    accel: Any = 0.0
-
-
-def _scalar_or_array(x):
-    """Plain float for a scalar (fast math path), float array otherwise."""
-    if isinstance(x, (float, int)):
-        return float(x)
-    arr = np.asarray(x, dtype=float)
-    return float(arr) if arr.ndim == 0 else arr
+    value: float
+    rate: float = 0.0
+    accel: float = 0.0
 
 
 def angle(value, rate=0.0, accel=0.0) -> Angle:
-    return Angle(_scalar_or_array(value), _scalar_or_array(rate), _scalar_or_array(accel))
+    return Angle(float(value), float(rate), float(accel))
 
 
 def point_on_link(pivot: Motion, length: float, ang: Angle, offset: float = 0.0) -> Motion:
@@ -80,7 +56,7 @@ def point_on_link(pivot: Motion, length: float, ang: Angle, offset: float = 0.0)
 
     Used for cranks (the driven crank angle) and for arms rigid with a rocker.
     """
-    c, s = _cos(ang.value + offset), _sin(ang.value + offset)
+    c, s = math.cos(ang.value + offset), math.sin(ang.value + offset)
     w, dw = ang.rate, ang.accel
     w2 = w * w
     return Motion(pivot.x + length * c, pivot.y + length * s,
@@ -97,41 +73,35 @@ def link_angle(start: Motion, end: Motion) -> Angle:
     vx, vy = end.vx - start.vx, end.vy - start.vy
     ax, ay = end.ax - start.ax, end.ay - start.ay
     r2 = rx * rx + ry * ry
-    return Angle(_atan2(ry, rx), (rx * vy - ry * vx) / r2, (rx * ay - ry * ax) / r2)
-
-
-def _require(ok, message: str):
-    """Raise AssemblyError unless `ok` holds everywhere; `.index` is the first failing sample."""
-    if ok if isinstance(ok, (bool, np.bool_)) else np.all(ok):
-        return
-    err = AssemblyError(message)
-    bad = np.logical_not(ok)
-    err.index = int(np.flatnonzero(np.ravel(bad))[0]) if np.ndim(bad) else 0
-    raise err
+    return Angle(math.atan2(ry, rx), (rx * vy - ry * vx) / r2, (rx * ay - ry * ax) / r2)
 
 
 def dyad_rrr(p: Motion, r_p: float, q: Motion, r_q: float, side: int, name: str = "dyad") -> Motion:
     """Joint X of two links (lengths r_p from P, r_q from Q): circle–circle intersection.
 
-    `side` is LEFT or RIGHT of the directed line P -> Q. Raises AssemblyError, whose `index` is
-    the flat index of the first sample where the circles do not intersect.
+    `side` is LEFT or RIGHT of the directed line P -> Q. Raises AssemblyError where the circles
+    do not intersect.
     """
     dx, dy = q.x - p.x, q.y - p.y
     d2 = dx * dx + dy * dy
-    _require(d2 > 0.0, f"{name}: the two pivots coincide")
-    d = _sqrt(d2)
+    if not d2 > 0.0:
+        raise AssemblyError(f"{name}: the two pivots coincide")
+    d = math.sqrt(d2)
     # distance from P, along P->Q, to the chord through the two intersection points
     along = (d2 + r_p * r_p - r_q * r_q) / (2.0 * d)
     h2 = r_p * r_p - along * along
-    _require(h2 >= 0.0, f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
+    if not h2 >= 0.0:
+        raise AssemblyError(f"{name}: links of {r_p:.6g} m and {r_q:.6g} m cannot meet")
     ex, ey = dx / d, dy / d
-    hh = side * _sqrt(h2)
+    hh = side * math.sqrt(h2)
     x, y = p.x + along * ex - hh * ey, p.y + along * ey + hh * ex
 
     # velocity and acceleration loops; rows of the matrix are (X - P) and (X - Q)
     ax_, ay_ = x - p.x, y - p.y
     bx_, by_ = x - q.x, y - q.y
     det = ax_ * by_ - ay_ * bx_
+    if det == 0.0:
+        raise AssemblyError(f"{name}: links of {r_p:.6g} m and {r_q:.6g} m are stretched flat")
 
     def solve(ra, rb):
         return (ra * by_ - rb * ay_) / det, (ax_ * rb - bx_ * ra) / det
@@ -156,26 +126,37 @@ def dyad_rrp(c: Motion, r: float, line_point: tuple[float, float], line_angle: f
     along = relx * ux + rely * uy
     off = ux * rely - uy * relx          # signed distance of C from the line
     h2 = r * r - off * off
-    _require(h2 >= 0.0, f"{name}: rod of {r:.6g} m cannot reach the slider line")
-    s = along + side * _sqrt(h2)
+    if not h2 >= 0.0:
+        raise AssemblyError(f"{name}: rod of {r:.6g} m cannot reach the slider line")
+    s = along + side * math.sqrt(h2)
     x, y = line_point[0] + s * ux, line_point[1] + s * uy
     rodx, rody = x - c.x, y - c.y
     denom = rodx * ux + rody * uy
+    if denom == 0.0:
+        raise AssemblyError(f"{name}: rod of {r:.6g} m stands square to the slider line")
     s_dot = (rodx * c.vx + rody * c.vy) / denom
     dvx, dvy = s_dot * ux - c.vx, s_dot * uy - c.vy
     s_ddot = (rodx * c.ax + rody * c.ay - (dvx * dvx + dvy * dvy)) / denom
     return Motion(x, y, s_dot * ux, s_dot * uy, s_ddot * ux, s_ddot * uy)
 
 
-def check_assembly(evaluate, mechanism: str, params, angle_name: str = "crank angle",
-                   samples: int = 3600) -> None:
-    """Evaluate a linkage over one crank turn (every 360/samples degrees); if it cannot be
-    assembled somewhere, raise AssemblyError naming the first crank angle and the parameters."""
-    crank = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
-    try:
-        evaluate(crank)
-    except AssemblyError as err:
-        deg = math.degrees(crank[err.index])
-        values = ", ".join(f"{k}={v:g}" for k, v in vars(params).items())
-        raise AssemblyError(f"{mechanism} cannot be assembled at {angle_name} = {deg:.1f}° "
-                            f"({err}); parameters: {values}") from None
+def crank_turn(samples: int) -> list[float]:
+    """`samples` crank angles evenly over one turn, from 0 (inclusive) to 2π (exclusive)."""
+    step = 2.0 * math.pi / samples
+    return [k * step for k in range(samples)]
+
+
+def check_assembly(evaluate: Callable[[float], object], mechanism: str, params,
+                   angle_name: str = "crank angle", samples: int = 3600) -> list:
+    """Evaluate a linkage over one crank turn (every 360/samples degrees) and return what
+    `evaluate` gave at each angle; if it cannot be assembled somewhere, raise AssemblyError
+    naming the first crank angle and the parameters."""
+    values = []
+    for crank in crank_turn(samples):
+        try:
+            values.append(evaluate(crank))
+        except (AssemblyError, ZeroDivisionError) as err:
+            listed = ", ".join(f"{k}={v:g}" for k, v in vars(params).items())
+            raise AssemblyError(f"{mechanism} cannot be assembled at {angle_name} = "
+                                f"{math.degrees(crank):.1f}° ({err}); parameters: {listed}") from None
+    return values

@@ -16,10 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
-from .kinematics import RIGHT, Motion, angle, check_assembly, dyad_rrp, dyad_rrr, link_angle, \
-    point_on_link
+from .kinematics import RIGHT, Motion, angle, check_assembly, crank_turn, dyad_rrp, dyad_rrr, \
+    link_angle, point_on_link
 from .parameters import ANY, CHOICE, NONNEGATIVE, ParameterError, parameter, validate
 
 SIX_BAR = 0
@@ -53,11 +51,11 @@ class PunchLinkageParams:
 
 @dataclass(frozen=True)
 class Excitation:
-    """psi and xi with their time derivatives (scalars or arrays of one shape)."""
-    psi: np.ndarray
-    xi: np.ndarray
-    xi_dot: np.ndarray
-    xi_ddot: np.ndarray
+    """psi and xi with their time derivatives."""
+    psi: float
+    xi: float
+    xi_dot: float
+    xi_ddot: float
 
 
 class PunchLinkage:
@@ -67,9 +65,10 @@ class PunchLinkage:
         validate(params)
         self.p = params
         if params.mode == SIX_BAR:
-            check_assembly(lambda alpha: self.slider(alpha, 0.0, 0.0), "punch six-bar", params,
-                           "crank angle alpha", _ASSEMBLY_SAMPLES)
-            self.alpha0 = self._crank_angle_of_top()
+            heights = check_assembly(lambda alpha: self.slider(alpha, 0.0, 0.0).y,
+                                     "punch six-bar", params, "crank angle alpha",
+                                     _ASSEMBLY_SAMPLES)
+            self.alpha0 = self._crank_angle_of_top(heights)
             self.y_top = self.slider(self.alpha0, 0.0, 0.0).y
         else:
             if params.phi_descent + params.phi_dwell + params.phi_return > 2 * math.pi + 1e-12:
@@ -97,11 +96,11 @@ class PunchLinkage:
         """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
         return self.joints(alpha, alpha_rate, alpha_accel)["D"]
 
-    def _crank_angle_of_top(self) -> float:
-        """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -."""
-        alpha = np.linspace(0.0, 2 * math.pi, _ASSEMBLY_SAMPLES, endpoint=False)
-        y = self.slider(alpha, 0.0, 0.0).y
-        k = int(np.argmax(y))
+    def _crank_angle_of_top(self, heights: list[float]) -> float:
+        """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -
+        (`heights`: the slider's Y_D at the crank angles of the assembly check)."""
+        alpha = crank_turn(_ASSEMBLY_SAMPLES)
+        k = max(range(len(heights)), key=heights.__getitem__)
         lo, hi = alpha[k] - 2 * math.pi / _ASSEMBLY_SAMPLES, alpha[k] + 2 * math.pi / _ASSEMBLY_SAMPLES
 
         def slope(a: float) -> float:      # dY_D/dalpha, analytic (crank rate 1)
@@ -116,33 +115,32 @@ class PunchLinkage:
         return 0.5 * (lo + hi) % (2 * math.pi)
 
     # --- required displacement -----------------------------------------------------------------
-    def _required(self, phi: np.ndarray):
+    def _required(self, phi: float) -> tuple[float, float, float]:
         """psi and its first two derivatives with respect to phi."""
         p = self.p
-        th = np.mod(np.asarray(phi, dtype=float), 2 * math.pi)
-        psi = np.zeros_like(th)
-        d1 = np.zeros_like(th)
-        d2 = np.zeros_like(th)
-        ends = np.cumsum([p.phi_descent, p.phi_dwell, p.phi_return])
-        down = th < ends[0]
-        dwell = (th >= ends[0]) & (th < ends[1])
-        up = (th >= ends[1]) & (th < ends[2])
-        for mask, start, width, sign in ((down, 0.0, p.phi_descent, +1),
-                                         (up, ends[1], p.phi_return, -1)):
-            u = (th[mask] - start) / width
-            s = u - np.sin(2 * math.pi * u) / (2 * math.pi)       # cycloidal law
-            psi[mask] = p.psi_m * (s if sign > 0 else 1.0 - s)
-            d1[mask] = sign * p.psi_m * (1.0 - np.cos(2 * math.pi * u)) / width
-            d2[mask] = sign * p.psi_m * 2 * math.pi * np.sin(2 * math.pi * u) / width ** 2
-        psi[dwell] = p.psi_m
+        th = phi % (2 * math.pi)
+        descent_end = p.phi_descent
+        dwell_end = descent_end + p.phi_dwell
+        return_end = dwell_end + p.phi_return
+        if th < descent_end:
+            start, width, sign = 0.0, p.phi_descent, +1.0
+        elif th < dwell_end:
+            return p.psi_m, 0.0, 0.0
+        elif th < return_end:
+            start, width, sign = dwell_end, p.phi_return, -1.0
+        else:
+            return 0.0, 0.0, 0.0                                   # at rest at the top
+        u = (th - start) / width
+        s = u - math.sin(2 * math.pi * u) / (2 * math.pi)          # cycloidal law
+        psi = p.psi_m * (s if sign > 0 else 1.0 - s)
+        d1 = sign * p.psi_m * (1.0 - math.cos(2 * math.pi * u)) / width
+        d2 = sign * p.psi_m * 2 * math.pi * math.sin(2 * math.pi * u) / width ** 2
         return psi, d1, d2
 
     # --- the excitation of the punch -------------------------------------------------------------
-    def excitation(self, phi, omega, epsilon) -> Excitation:
+    def excitation(self, phi: float, omega: float, epsilon: float) -> Excitation:
         """psi, xi, dxi/dt, d2xi/dt2 for shaft angle phi (rad), speed omega, acceleration epsilon."""
         if self.p.mode == SIX_BAR:
-            if not isinstance(phi, float):
-                phi, omega, epsilon = (np.asarray(x, float) for x in (phi, omega, epsilon))
             d = self.slider(self.alpha0 - phi, -omega, -epsilon)
             psi = self.y_top - d.y
             return Excitation(psi, self.p.xi0 - psi, d.vy, d.ay)

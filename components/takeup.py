@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from .kinematics import LEFT, Angle, Motion, angle, check_assembly, dyad_rrr, link_angle, \
     point_on_link
 from .parameters import ANY, parameter, validate
@@ -60,44 +58,3 @@ class TakeupLinkage:
         phi_bc = link_angle(b, c)
         e = point_on_link(b, p.L_BE, phi_bc, offset=p.angle_CBE)
         return TakeupMotion(b, c, e, phi_bc, link_angle(d, c))
-
-    def eye_printed_formula(self, theta) -> Motion:
-        """E as the paper prints it, from φ_CD + ∠CBE (wrong: shown by the tests)."""
-        m = self.motion(theta)
-        return point_on_link(m.B, self.p.L_BE, m.phi_CD, offset=self.p.angle_CBE)
-
-
-def central_difference_velocity(linkage: TakeupLinkage, theta, omega: float,
-                                d_theta: float = math.radians(0.5)) -> tuple:
-    """The paper's velocity of E: central differences in θ with step d_theta, times ω."""
-    plus, minus = linkage.motion(theta + d_theta).E, linkage.motion(theta - d_theta).E
-    scale = omega / (2.0 * d_theta)
-    return (plus.x - minus.x) * scale, (plus.y - minus.y) * scale
-
-
-def path_stroke(e_z: np.ndarray, e_x: np.ndarray) -> float:
-    """The largest distance between two points of E's path: the eye's stroke, a measure of the
-    thread amount it pulls per stitch."""
-    pts = np.column_stack([e_z, e_x])
-    hull = pts if len(pts) < 4 else pts[_convex_hull(pts)]
-    diff = hull[:, None, :] - hull[None, :, :]
-    return float(np.sqrt((diff ** 2).sum(-1)).max())
-
-
-def _convex_hull(pts: np.ndarray) -> list[int]:
-    """Indices of the convex hull (monotone chain); the diameter is between hull points."""
-    order = np.lexsort((pts[:, 1], pts[:, 0]))
-
-    def half(indices):
-        chain: list[int] = []
-        for i in indices:
-            while len(chain) >= 2:
-                o, a = pts[chain[-2]], pts[chain[-1]]
-                if (a[0] - o[0]) * (pts[i][1] - o[1]) - (a[1] - o[1]) * (pts[i][0] - o[0]) > 0:
-                    break
-                chain.pop()
-            chain.append(int(i))
-        return chain
-
-    lower, upper = half(order), half(order[::-1])
-    return lower[:-1] + upper[:-1]

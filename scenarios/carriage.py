@@ -18,6 +18,8 @@ from components.carriage import CarriageDrive, CarriageDriveParams, CarriageModa
 from components.oscillator import DampedOscillator
 from components.parameters import with_values
 
+from .sampling import sampled
+
 RATES = np.arange(600.0, 2000.0 + 1e-9, 20.0)          # stitches/min
 MACHINE_RATE = 1600.0
 STEPS_PER_STITCH = 360
@@ -93,7 +95,7 @@ def periodic_response(model: CarriageModal, drive: CarriageDrive, rate_per_min: 
     period = 2 * math.pi / omega
     h = period / steps
     t = np.arange(steps + 1) * h
-    _, _, acc, jerk = drive.motion(omega * t, omega, 0.0)
+    _, _, acc, jerk = sampled(drive.motion, omega * t, omega, 0.0)
     q = np.zeros((2, 2, steps + 1))            # mode, (q, q'), time
     for i, (phi, g0, g1) in enumerate(_step_maps(model, h)):
         # the forced part over one stitch from rest, then the initial state that repeats
@@ -108,7 +110,7 @@ def periodic_response(model: CarriageModal, drive: CarriageDrive, rate_per_min: 
         for k in range(steps + 1):
             q[i, :, k] = forced[:, k] + free
             free = phi @ free
-    return t, model.modes @ q[:, 0, :]
+    return t, np.asarray(model.modes) @ q[:, 0, :]
 
 
 def resonance_study() -> dict:

@@ -17,6 +17,8 @@ from components.feed import FeedLinkage, FeedParams
 from components.kinematics import AssemblyError
 from components.parameters import with_values
 
+from .sampling import sampled
+
 L5_L4_RATIOS = (3.5, 4.5, 5.5, 6.0, 6.5, 7.0)
 ROD_RATIOS = tuple(np.round(np.arange(0.7, 1.7001, 0.05), 2))
 _PHI1 = np.radians(np.arange(0.0, 360.0, 0.5))
@@ -90,7 +92,7 @@ def plot(curves, path, title: str) -> None:
 # --- the lever-ratio study -----------------------------------------------------------------------
 def _case(params: FeedParams, **changes) -> dict:
     try:
-        motion = FeedLinkage(with_values(params, **changes)).motion(_PHI1)
+        motion = sampled(FeedLinkage(with_values(params, **changes)).motion, _PHI1)
     except AssemblyError as err:
         return {"assembles": False, "error": str(err)}
     phi5 = np.degrees(np.unwrap(motion.phi5.value))

@@ -21,6 +21,8 @@ from components.punch_contact import GRAVITY, PunchContactParams
 from components.punch_linkage import PunchLinkage, PunchLinkageParams
 from components.shaft import MainShaft, ShaftParams
 
+from .sampling import sampled
+
 
 @dataclass
 class ReferenceSolution:
@@ -206,7 +208,7 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
             spring_on[mask] = s_on
             held[mask] = on_stop
     motion = np.array([shaft.state(t) for t in times])
-    e = linkage.excitation(motion[:, 0], motion[:, 1], motion[:, 2])
+    e = sampled(linkage.excitation, motion[:, 0], motion[:, 1], motion[:, 2])
     f2 = np.where(contact, np.maximum(-(p.c2 * y + p.b2 * v), 0.0), 0.0)
     f3 = np.where(spring_on, p.F30 + p.c3 * (e.xi - y) + p.b3 * (e.xi_dot - v), 0.0)
     if p.compression_only:

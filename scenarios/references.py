@@ -19,6 +19,8 @@ from typing import Callable
 
 import numpy as np
 
+from .sampling import sampled
+
 REFERENCE_DIR = Path(__file__).resolve().parent.parent / "tests" / "references"
 
 
@@ -38,14 +40,14 @@ def _shaft(omega: float):
 
 def _punch_inputs(t):
     from components.punch_linkage import PunchLinkage
-    e = PunchLinkage().excitation(200.0 * t, 200.0, 0.0)
+    e = sampled(PunchLinkage().excitation, 200.0 * t, 200.0, 0.0)
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}
 
 
 def _carriage_inputs(t):
     from components.carriage import CarriageDrive
     omega = 1600 * 2 * math.pi / 60
-    _, _, a, jerk = CarriageDrive().motion(omega * t, omega, 0.0)
+    _, _, a, jerk = sampled(CarriageDrive().motion, omega * t, omega, 0.0)
     return {"a_base": a, "a_base_dot": jerk}
 
 

@@ -11,9 +11,11 @@ import math
 
 import numpy as np
 
-from components.parameters import with_values
 from components.kinematics import AssemblyError
-from components.takeup import TakeupLinkage, TakeupParams, path_stroke
+from components.parameters import with_values
+from components.takeup import TakeupLinkage, TakeupParams
+
+from .sampling import sampled
 
 LINKS = ("L_AB", "L_BC", "L_CD", "L_BE")
 
@@ -29,6 +31,44 @@ def central_difference(result, shaft="shaft", eye="takeup"):
         v[1:-1] = (e[2:] - e[:-2]) / (phi[2:] - phi[:-2]) * omega[1:-1]
         out.append(v)
     return out
+
+
+def central_difference_velocity(linkage: TakeupLinkage, theta, omega: float,
+                                d_theta: float = math.radians(0.5)) -> tuple:
+    """The paper's velocity of E at crank angles theta: central differences in θ with step
+    d_theta, times ω."""
+    plus = sampled(lambda th: linkage.motion(th + d_theta).E, theta)
+    minus = sampled(lambda th: linkage.motion(th - d_theta).E, theta)
+    scale = omega / (2.0 * d_theta)
+    return (plus.x - minus.x) * scale, (plus.y - minus.y) * scale
+
+
+def path_stroke(e_z: np.ndarray, e_x: np.ndarray) -> float:
+    """The largest distance between two points of E's path: the eye's stroke, a measure of the
+    thread amount it pulls per stitch."""
+    pts = np.column_stack([e_z, e_x])
+    hull = pts if len(pts) < 4 else pts[_convex_hull(pts)]
+    diff = hull[:, None, :] - hull[None, :, :]
+    return float(np.sqrt((diff ** 2).sum(-1)).max())
+
+
+def _convex_hull(pts: np.ndarray) -> list[int]:
+    """Indices of the convex hull (monotone chain); the diameter is between hull points."""
+    order = np.lexsort((pts[:, 1], pts[:, 0]))
+
+    def half(indices):
+        chain: list[int] = []
+        for i in indices:
+            while len(chain) >= 2:
+                o, a = pts[chain[-2]], pts[chain[-1]]
+                if (a[0] - o[0]) * (pts[i][1] - o[1]) - (a[1] - o[1]) * (pts[i][0] - o[0]) > 0:
+                    break
+                chain.pop()
+            chain.append(int(i))
+        return chain
+
+    lower, upper = half(order), half(order[::-1])
+    return lower[:-1] + upper[:-1]
 
 
 def summary_of_run(result, shaft="shaft", eye="takeup") -> dict:
@@ -117,7 +157,8 @@ _THETA = np.radians(np.arange(0.0, 360.0, 0.5))
 
 
 def _path(params: TakeupParams):
-    e = TakeupLinkage(params).motion(_THETA).E
+    linkage = TakeupLinkage(params)
+    e = sampled(lambda theta: linkage.motion(theta).E, _THETA)
     return e.x, e.y
 
 

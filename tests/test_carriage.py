@@ -12,6 +12,7 @@ from scenarios.carriage import periodic_response, resonance_study
 from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize
+from scenarios.sampling import sampled
 
 
 def test_stiffness_is_the_inverse_flexibility_in_closed_form():
@@ -24,7 +25,7 @@ def test_stiffness_is_the_inverse_flexibility_in_closed_form():
     assert np.allclose(model.K, closed, rtol=1e-12)
     # and the strain energy of the Ritz shapes gives the same matrix
     assert np.allclose(model.energy_stiffness(), closed, rtol=1e-10)
-    assert np.allclose(flexibility(p) @ model.K, np.eye(2), atol=1e-12)
+    assert np.allclose(np.array(flexibility(p)) @ model.K, np.eye(2), atol=1e-12)
 
 
 def _fe_frequencies(p: CarriageParams, n_elements: int = 60):
@@ -57,7 +58,7 @@ def _fe_frequencies(p: CarriageParams, n_elements: int = 60):
 
 def test_frequencies_bound_a_finite_element_beam_from_above():
     p = CarriageParams()
-    ritz = CarriageModal(p).omega
+    ritz = np.array(CarriageModal(p).omega)
     fe = _fe_frequencies(p)
     assert np.all(ritz >= fe * (1 - 1e-9))       # Rayleigh-Ritz: an upper bound
     assert ritz[0] == pytest.approx(fe[0], rel=0.02)
@@ -68,14 +69,14 @@ def test_paper_frequencies_are_not_the_models():
     """The paper's ω1 = 180.2 rad/s appears only with the mass matrix halved."""
     model = CarriageModal()
     assert model.omega[0] == pytest.approx(127.24, abs=0.01)
-    halved = np.sqrt(eigh(model.K, model.M / 2, eigvals_only=True))
+    halved = np.sqrt(eigh(np.array(model.K), np.array(model.M) / 2, eigvals_only=True))
     assert halved[0] == pytest.approx(180.2, rel=0.005)
     assert abs(halved[1] - 6184) > 1000 and abs(model.omega[1] - 6184) > 1000
 
 
 def test_load_vector_is_not_M_times_ones():
     model = CarriageModal()
-    assert not np.allclose(model.load, model.M @ [1.0, 1.0], rtol=1e-3)
+    assert not np.allclose(model.load, np.array(model.M) @ [1.0, 1.0], rtol=1e-3)
     assert model.load[1] > model.p.m_k                   # the carriage plus part of the beam
 
 
@@ -86,30 +87,33 @@ def test_static_response_to_a_constant_base_acceleration():
         q, dq = model.step(q, dq, 5.0, 0.0, 2e-3)
     U, _ = model.physical(q, dq)
     assert np.allclose(U, -np.linalg.solve(model.K, model.load) * 5.0, rtol=1e-9, atol=1e-15)
+    # and the model's own static deflection is that solution
+    assert np.allclose(model.static_deflection(5.0), U, rtol=1e-9, atol=1e-15)
 
 
 @pytest.mark.parametrize("h", [4e-3, 1e-4])
 def test_exact_integrator_matches_scipy_at_coarse_and_fine_steps(h):
     """Physical coordinates, damping C = M·Φ·diag(2ζω)·Φᵀ·M, the same piecewise-linear input."""
     model = CarriageModal()
-    phi, w, z = model.modes, model.omega, model.p.zeta
-    C = model.M @ phi @ np.diag(2 * z * w) @ phi.T @ model.M
+    phi, w, z = np.array(model.modes), np.array(model.omega), model.p.zeta
+    K, M = np.array(model.K), np.array(model.M)
+    C = M @ phi @ np.diag(2 * z * w) @ phi.T @ M
     drive = CarriageDrive()
     omega = 1500 * 2 * math.pi / 60
     n = round(0.12 / h)
     knots = np.arange(n + 1) * h
     t_end = knots[-1]
-    _, _, a_knots, jerk_knots = drive.motion(omega * knots, omega, 0.0)
+    _, _, a_knots, jerk_knots = sampled(drive.motion, omega * knots, omega, 0.0)
 
     def a_of(t):                                     # the input the exact method assumes
         k = min(int(t / h), n - 1)
         return a_knots[k] + jerk_knots[k] * (t - knots[k])
 
-    minv = np.linalg.inv(model.M)
+    minv = np.linalg.inv(M)
 
     def rhs(t, s):
         u, du = s[:2], s[2:]
-        return np.concatenate([du, minv @ (-model.K @ u - C @ du - model.load * a_of(t))])
+        return np.concatenate([du, minv @ (-K @ u - C @ du - np.array(model.load) * a_of(t))])
 
     ref = solve_ivp(rhs, (0, t_end), np.zeros(4), method="DOP853", rtol=1e-11, atol=1e-15,
                     max_step=h / 4, t_eval=knots)
@@ -130,14 +134,14 @@ def test_periodic_steady_state_matches_a_frequency_domain_solution():
     omega = rate * 2 * math.pi / 60
     N = 4096
     t = np.arange(N) * (2 * math.pi / omega) / N
-    _, _, acc, _ = drive.motion(omega * t, omega, 0.0)
+    _, _, acc, _ = sampled(drive.motion, omega * t, omega, 0.0)
     A = np.fft.rfft(acc)
     k = np.arange(len(A))
     resp = np.zeros((2, len(A)), dtype=complex)
     for i in range(2):
         wi = model.omega[i]
         H = -model.modal_load[i] / (wi ** 2 - (k * omega) ** 2 + 2j * model.p.zeta * wi * k * omega)
-        resp += np.outer(model.modes[:, i], H * A)
+        resp += np.outer(np.array(model.modes)[:, i], H * A)
     U2 = np.fft.irfft(resp[1], n=N)
     assert np.abs(U[1]).max() == pytest.approx(np.abs(U2).max(), rel=2e-3)
 
@@ -159,3 +163,16 @@ def test_resonance_study():
                                                           abs=20)
     stiff = study["designs"]["traverse twice as stiff (EJ × 2)"]
     assert stiff["omega1"] == pytest.approx(study["omega1"] * math.sqrt(2), rel=1e-9)
+
+
+@pytest.mark.parametrize("changes", [{}, {"EJ": 2 * 2604.0}, {"l": 0.415}, {"a": 0.05, "J_c": 2.0}])
+def test_closed_form_modes_agree_with_a_general_eigen_solver(changes):
+    """The FMU's 2×2 closed form (standard library only) against scipy's generalized eigh."""
+    model = CarriageModal(CarriageParams(**changes))
+    K, M, phi = np.array(model.K), np.array(model.M), np.array(model.modes)
+    lam = eigh(K, M, eigvals_only=True)
+    assert np.allclose(model.omega, np.sqrt(lam), rtol=1e-12)
+    assert np.allclose(phi.T @ M @ phi, np.eye(2), atol=1e-12)                # mass-normalized
+    assert np.allclose(phi.T @ K @ phi, np.diag(lam), rtol=1e-10, atol=1e-6 * lam.max())
+    U = np.array([1.3e-4, -2.1e-4])
+    assert np.allclose(phi @ model.modal(tuple(U)), U, rtol=1e-12)           # q = Φᵀ·M·U

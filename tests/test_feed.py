@@ -11,6 +11,7 @@ from scenarios.feed import ratio_study
 from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize
+from scenarios.sampling import sampled
 
 PHI1 = np.radians(np.arange(0.0, 360.0, 0.1))
 
@@ -26,7 +27,7 @@ def _dir(j, a, b):
 def test_every_link_length_is_kept_at_every_crank_angle():
     link = FeedLinkage()
     p = link.p
-    j = link.motion(PHI1).joints
+    j = sampled(link.motion, PHI1).joints
     for a, b, length in (("A", "B", p.r_l), ("A", "K", p.r_f), ("B", "C", p.l2), ("D", "C", p.l3),
                          ("D", "E", p.l3p), ("K", "N", p.l8), ("G", "N", p.l7), ("G", "H", p.l7p),
                          ("E", "F", p.l4), ("H", "F", p.l5), ("H", "M", p.l_HM)):
@@ -46,8 +47,8 @@ def test_velocities_match_finite_differences():
     t = np.linspace(0.0, 0.03, 151)
     dt = 1e-7
     phi = lambda tt: w * tt + 0.5 * eps * tt * tt
-    m = link.motion(phi(t), w + eps * t, eps)
-    mp, mm = link.motion(phi(t + dt)), link.motion(phi(t - dt))
+    m = sampled(link.motion, phi(t), w + eps * t, eps)
+    mp, mm = sampled(link.motion, phi(t + dt)), sampled(link.motion, phi(t - dt))
     for pos, vel in (("x", "vx"), ("y", "vy")):
         fd = (getattr(mp.joints["M"], pos) - getattr(mm.joints["M"], pos)) / (2 * dt)
         assert np.allclose(getattr(m.joints["M"], vel), fd, rtol=1e-6, atol=1e-8)
@@ -58,7 +59,7 @@ def test_velocities_match_finite_differences():
 
 def test_the_assembly_branch_is_continuous_over_a_revolution():
     link = FeedLinkage()
-    j = link.motion(np.append(PHI1, 2 * np.pi)).joints
+    j = sampled(link.motion, np.append(PHI1, 2 * np.pi)).joints
     for name in ("C", "N", "F", "M"):
         steps = np.hypot(np.diff(j[name].x), np.diff(j[name].y))
         assert steps.max() < 0.05e-3, name        # 0.1° of crank moves no joint by 0.05 mm
@@ -72,7 +73,7 @@ def test_the_assembly_branch_is_continuous_over_a_revolution():
 
 
 def test_default_swings_are_the_printed_ones():
-    m = FeedLinkage().motion(PHI1)
+    m = sampled(FeedLinkage().motion, PHI1)
     swing = lambda a: math.degrees(np.ptp(np.unwrap(a.value)))
     assert swing(m.phi3) == pytest.approx(13.7, abs=0.05)
     assert swing(m.phi7) == pytest.approx(18.4, abs=0.05)
@@ -80,7 +81,7 @@ def test_default_swings_are_the_printed_ones():
 
 def test_feed_scenario_figures(fmu_paths):
     fig = summarize(run(load("feed"), fmu_paths))
-    m = FeedLinkage().motion(PHI1)
+    m = sampled(FeedLinkage().motion, PHI1)
     assert fig["phi3_swing_deg"] == pytest.approx(13.7, abs=0.05)
     assert fig["phi7_swing_deg"] == pytest.approx(18.4, abs=0.05)
     assert fig["M_path_width_mm"] == pytest.approx(np.ptp(m.joints["M"].x) * 1e3, rel=1e-3)
@@ -97,7 +98,7 @@ def test_ratio_study_reports_what_cannot_assemble_and_goes_on():
     rods = {r["l2_over_l8"]: r for r in study["rod_ratio"]}
     assert rods[1.0]["assembles"]
     assert rods[1.0]["phi5_amplitude_deg"] == pytest.approx(
-        math.degrees(np.ptp(np.unwrap(FeedLinkage().motion(PHI1).phi5.value))), abs=0.01)
+        math.degrees(np.ptp(np.unwrap(sampled(FeedLinkage().motion, PHI1).phi5.value))), abs=0.01)
     assert not rods[0.7]["assembles"] and "cannot be assembled at crank angle" in rods[0.7]["error"]
     assert not rods[1.7]["assembles"]
 

@@ -6,12 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from components.kinematics import AssemblyError
-from components.takeup import TakeupLinkage, TakeupParams, central_difference_velocity, path_stroke
+from components.kinematics import AssemblyError, point_on_link
+from components.takeup import TakeupLinkage, TakeupParams
 from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize
-from scenarios.takeup import tolerance_study
+from scenarios.sampling import sampled
+from scenarios.takeup import central_difference_velocity, path_stroke, tolerance_study
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 
@@ -23,7 +24,7 @@ def _dist(p, q):
 def test_closure_at_every_crank_angle_and_a_rigid_coupler_triangle():
     link = TakeupLinkage()
     p = link.p
-    m = link.motion(THETA)
+    m = sampled(link.motion, THETA)
     a = type(m.B)(0.0, 0.0)
     d = type(m.B)(p.z_D, p.x_D)
     assert np.allclose(_dist(a, m.B), p.L_AB, atol=1e-12)
@@ -35,10 +36,16 @@ def test_closure_at_every_crank_angle_and_a_rigid_coupler_triangle():
     assert np.allclose(_dist(m.C, m.E), ce, atol=1e-12)
 
 
+def _eye_by_printed_formula(link, theta):
+    """E as the paper prints it, from φ_CD + ∠CBE (wrong: shown below)."""
+    m = link.motion(theta)
+    return point_on_link(m.B, link.p.L_BE, m.phi_CD, offset=link.p.angle_CBE)
+
+
 def test_the_papers_printed_formula_deforms_the_coupler_triangle():
     link = TakeupLinkage()
-    m = link.motion(THETA)
-    printed = link.eye_printed_formula(THETA)
+    m = sampled(link.motion, THETA)
+    printed = sampled(lambda theta: _eye_by_printed_formula(link, theta), THETA)
     ce = _dist(m.C, printed)
     assert np.ptp(ce) > 5e-3               # |CE| changes by more than 5 mm over a turn
 
@@ -49,8 +56,9 @@ def test_velocity_and_acceleration_match_finite_differences():
     t = np.linspace(0.0, 0.02, 201)
     dt = 1e-7
     theta = lambda tt: w0 * tt + 0.5 * eps * tt * tt
-    e = link.motion(theta(t), w0 + eps * t, eps).E
-    ep, em = link.motion(theta(t + dt)).E, link.motion(theta(t - dt)).E
+    eye = lambda *args: link.motion(*args).E
+    e = sampled(eye, theta(t), w0 + eps * t, eps)
+    ep, em = sampled(eye, theta(t + dt)), sampled(eye, theta(t - dt))
     for pos, vel, acc in (("x", "vx", "ax"), ("y", "vy", "ay")):
         fd_v = (getattr(ep, pos) - getattr(em, pos)) / (2 * dt)
         fd_a = (getattr(ep, pos) - 2 * getattr(e, pos) + getattr(em, pos)) / dt ** 2
@@ -61,7 +69,7 @@ def test_velocity_and_acceleration_match_finite_differences():
 def test_central_difference_error_shrinks_as_the_square_of_the_step():
     link = TakeupLinkage()
     omega = 5000 * 2 * math.pi / 60
-    exact = link.motion(THETA, omega).E
+    exact = sampled(lambda theta: link.motion(theta, omega).E, THETA)
     errors = []
     for deg in (2.0, 1.0, 0.5, 0.25):
         vz, vx = central_difference_velocity(link, THETA, omega, math.radians(deg))
@@ -74,7 +82,7 @@ def test_takeup_scenario_figures(fmu_paths):
     result = run(load("takeup"), fmu_paths)
     fig = summarize(result)
     link = TakeupLinkage()
-    e = link.motion(THETA, 5000 * 2 * math.pi / 60).E
+    e = sampled(lambda theta: link.motion(theta, 5000 * 2 * math.pi / 60).E, THETA)
     assert fig["central_difference_step_deg"] == pytest.approx(0.5, rel=1e-9)
     assert fig["path_extent_z_mm"] == pytest.approx(np.ptp(e.x) * 1e3, rel=1e-3)
     assert fig["path_extent_x_mm"] == pytest.approx(np.ptp(e.y) * 1e3, rel=1e-3)
@@ -91,8 +99,10 @@ def test_tolerance_study():
     assert rows[("L_BE", 0.1)]["max_path_deviation_mm"] == pytest.approx(0.1, abs=1e-9)
     # the pin adjustment: the fitted slope agrees with the local derivative of the stroke
     h = 1e-6
-    stroke = lambda l_cd: path_stroke(*(lambda e: (e.x, e.y))(
-        TakeupLinkage(TakeupParams(L_CD=l_cd)).motion(THETA).E))
+    def stroke(l_cd):
+        link = TakeupLinkage(TakeupParams(L_CD=l_cd))
+        e = sampled(lambda theta: link.motion(theta).E, THETA)
+        return path_stroke(e.x, e.y)
     local = (stroke(24e-3 + h) - stroke(24e-3 - h)) / (2 * h)
     assert study["stroke_change_per_mm_of_pin_adjustment"] == pytest.approx(local, rel=0.05)
 
