@@ -120,7 +120,11 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR) -
         try:
             built = FmuBuilder.build_FMU(script, dest=tmp / "out" / f"{name}.fmu",
                                          project_files=[pkg_dir], canGetAndSetFMUstate=True,
-                                         canSerializeFMUstate=True)
+                                         canSerializeFMUstate=True,
+                                         # the FMU embeds the interpreter in the host's process:
+                                         # a library it needs, not a tool it couples to (PyFMI
+                                         # refuses FMUs that say true)
+                                         needsExecutionTool=False)
             # replace atomically: another process may be reading the old FMU right now
             out = dest / f"{name}.fmu"
             staged = dest / f".{name}.fmu.{os.getpid()}"

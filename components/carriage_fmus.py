@@ -1,8 +1,12 @@
 """FMUs CarriageDrive and CarriageModal: the semi-automat's start-stop table and its carriage."""
 from __future__ import annotations
 
+import math
+
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
-from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
+from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, shaft_inputs
+
+SPEED = 1600 * 2 * math.pi / 60          # the semi-automat's 1600 stitches/min, in rad/s
 
 
 class CarriageDriveSlave(SewSlave):
@@ -10,7 +14,8 @@ class CarriageDriveSlave(SewSlave):
 
     model_name = "CarriageDrive"
     params_class = CarriageDriveParams
-    inputs = SHAFT_INPUTS
+    inputs = shaft_inputs(SPEED)
+    experiment = (3 * 2 * math.pi / SPEED, 1e-4)  # three stitches
     taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("x", "m", "table position along the motion axis", feedthrough=True),
@@ -35,8 +40,13 @@ class CarriageModalSlave(SewSlave):
     params_class = CarriageParams
     inputs = (
         Port("a_base", "m/s2", "acceleration of the traverse (the cantilever's root)"),
-        Port("a_base_dot", "m/s3", "its rate of change (the drive's jerk)"),
+        Port("a_base_dot", "m/s3", "its rate of change (the drive's jerk)",
+             start=17967.066500827565),
     )
+    # the start values are the default drive's at φ = 0 (at rest, the transport window opening
+    # with the cycloid's jerk); run alone, that jerk is held: the guide's response to a base
+    # acceleration growing linearly, over a quarter period of the first mode
+    experiment = (0.012, 1e-4)
     taylor_inputs = (("a_base", "a_base_dot"),)
     outputs = (
         Port("U1", "m", "deflection of the guide at section A, relative to the root"),

@@ -1,8 +1,10 @@
 """FMU FeedLinkage: the closed lever-hinge feed mechanism and its feed-dog point M."""
 from __future__ import annotations
 
+import math
+
 from .feed import FeedLinkage, FeedParams
-from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
+from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, shaft_inputs
 
 
 class FeedLinkageSlave(SewSlave):
@@ -10,7 +12,8 @@ class FeedLinkageSlave(SewSlave):
 
     model_name = "FeedLinkage"
     params_class = FeedParams
-    inputs = SHAFT_INPUTS
+    inputs = shaft_inputs(303.5)                  # ω1 of the paper, rad/s
+    experiment = (2 * math.pi / 303.5, 5e-5)      # one revolution
     taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("phi3", "rad", "lever 3 (direction D -> C), in (-π, π]", feedthrough=True),

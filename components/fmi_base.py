@@ -1,15 +1,24 @@
 """The shared FMU layer: what every sewfmu FMU needs and pythonfmu does not give.
 
 A concrete FMU subclasses `SewSlave` and declares, as class attributes, its parameter dataclass,
-its inputs, outputs and calculated parameters; it implements `build_model`, `initialize`,
-`advance` and `current_outputs`, which forward to the plain-Python model. This class gives:
+its inputs, outputs and calculated parameters and its default experiment; it implements
+`build_model`, `initialize`, `advance` and `current_outputs`, which forward to the plain-Python
+model. This class gives:
 
 - a modelDescription that passes `fmpy validate`: units with SI base units, outputs and initial
   unknowns in ModelStructure, each output's dependency on the inputs declared (direct
-  feedthrough or none);
-- parameters checked when the model is built: a bad value or a linkage that cannot assemble is
-  logged at status fmi2Error naming the parameter, and the call fails;
-- inputs that are refused when NaN or infinite;
+  feedthrough or none), a DefaultExperiment;
+- statuses as FMI 2.0 means them, within what pythonfmu 0.7.0 allows. pythonfmu turns every
+  Python exception into fmi2Fatal (and 0.7.0 then keeps the interpreter lock), after which a host
+  may call nothing, not even fmi2FreeInstance. So no exception leaves this class: a step the
+  model cannot take (a NaN input, too many contact switches, a step too long for the switch
+  search, a non-finite result, a call out of the standard's order) returns False from do_step,
+  which pythonfmu reports as fmi2Discard, with an fmi2Error log line naming the cause, and the
+  instance stays as it was before the step (the host may restore a state, terminate, free);
+- parameters checked when the model is built at exitInitializationMode: a bad value or a linkage
+  that cannot assemble is logged at fmi2Error naming the parameter (or the crank angle), and
+  every later doStep is refused the same way (pythonfmu could only say so at exitInitialization-
+  Mode through an exception, i.e. fmi2Fatal; see README "In other FMI tools");
 - FMU state (get/set/serialize) that holds the model's internal state, so that a restored state
   repeats the following steps bit for bit;
 - the co-simulation contract every sewfmu FMU follows:
@@ -18,15 +27,18 @@ its inputs, outputs and calculated parameters; it implements `build_model`, `ini
     outputs read after inputs were set reflect those inputs (declared direct feedthrough);
     inside a step, inputs are extrapolated from the derivative inputs the FMU is given (Taylor),
   so that a plain Jacobi master of another tool gets the same physics;
-- no module-level mutable state: everything lives on the instance.
+- no module-level mutable state: everything lives on the instance; the standard library only.
 """
 from __future__ import annotations
 
+import json
 import math
+import sys
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 from xml.etree.ElementTree import Element, SubElement
 
+from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real
@@ -65,13 +77,21 @@ class Port:
     kind: str = "Real"             # "Real" or "Boolean"
 
 
-# the main shaft's motion: the inputs of every linkage, extrapolated inside a step
-SHAFT_INPUTS = (
-    Port("phi", "rad", "shaft angle, cumulative (the crank angle of the linkage)"),
-    Port("omega", "rad/s", "shaft speed"),
-    Port("epsilon", "rad/s2", "shaft angular acceleration"),
-)
+def shaft_inputs(omega: float) -> tuple[Port, Port, Port]:
+    """The main shaft's motion, the inputs of every linkage (extrapolated inside a step), starting
+    at the setup position φ = 0 and turning at `omega`: the mechanism's own default speed, so
+    that a host that starts the inputs at their start values runs it at that speed."""
+    return (
+        Port("phi", "rad", "shaft angle, cumulative (the crank angle of the linkage)"),
+        Port("omega", "rad/s", "shaft speed", start=omega),
+        Port("epsilon", "rad/s2", "shaft angular acceleration"),
+    )
+
+
 SHAFT_TAYLOR = (("phi", "omega", "epsilon"),)
+
+# a step must start where the last one ended, to within this fraction of max(1 s, |t|, h)
+_TIME_TOLERANCE = 1e-9
 
 
 class FmuError(RuntimeError):
@@ -90,24 +110,33 @@ class SewSlave(Fmi2Slave):
     model_name = ""                # the FMU's modelName / modelIdentifier
     # input chains (value, its rate[, its acceleration]) extrapolated inside a step by Taylor
     taylor_inputs: Sequence[tuple[str, ...]] = ()
+    # DefaultExperiment (stop time, step size): the FMU run alone shows its mechanism working
+    experiment: tuple[float, float] = (1.0, 1e-3)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.modelName = type(self).model_name or type(self).__name__
-        self.description = (type(self).__doc__ or "").strip().splitlines()[0]
+        if "logger" in kwargs:         # instantiated by pythonfmu's binary, not by its builder
+            _forget_resources_path(kwargs.get("resources"))
         cls = type(self)
+        self.modelName = cls.model_name or cls.__name__
+        self.description = (cls.__doc__ or "").strip().splitlines()[0]
+        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=cls.experiment[0],
+                                                    step_size=cls.experiment[1])
         self._param_info = parameter_info(cls.params_class) if cls.params_class else []
         self._params = {p.name: p.default for p in self._param_info}
         self._inputs = {p.name: float(p.start) for p in cls.inputs}
         self._elapsed = 0.0            # time since the inputs were last set (for extrapolation)
         self._time = 0.0
+        self._initialized = False      # exitInitializationMode has run
+        self._broken: str | None = None   # why this instance cannot run (bad parameters)
         self._model = None
         self._cache: dict[str, Any] | None = None
+        self._last_error = ""             # the getters log an error once, not at every call
         self._register_all()
         # value reference -> getter / setter, for the batched calls of every step
-        self._real_get = {vr: v.getter for vr, v in self.vars.items() if isinstance(v, Real)}
-        self._real_set = {vr: v.setter for vr, v in self.vars.items()
-                          if isinstance(v, Real) and v.setter is not None}
+        self._getters = {vr: v.getter for vr, v in self.vars.items()}
+        self._setters = {vr: v.setter for vr, v in self.vars.items() if v.setter is not None}
+        self._types = {vr: type(v) for vr, v in self.vars.items()}
 
     # --- declaration ---------------------------------------------------------------------------
     def _register_all(self) -> None:
@@ -142,6 +171,10 @@ class SewSlave(Fmi2Slave):
 
     def _param_setter(self, name: str) -> Callable[[Any], None]:
         def set_param(value):
+            if self._initialized:      # variability "fixed": FMI forbids it after initialization
+                self._error(f"parameter {name} is fixed: it cannot change after "
+                            f"exitInitializationMode (value {value!r} ignored)")
+                return
             self._params[name] = value
             self._model = None        # rebuilt (and checked) with the new value when next needed
             self._cache = None
@@ -160,21 +193,30 @@ class SewSlave(Fmi2Slave):
     def _output_getter(self, name: str) -> Callable[[], Any]:
         def get_output():
             if self._cache is None:
-                self._cache = self._checked(self.current_outputs())
+                self._cache = self._outputs_or_nan()
             return self._cache[name]
         return get_output
 
-    def _checked(self, outputs: dict[str, Any]) -> dict[str, Any]:
-        """Refuse to hand out a NaN or infinite output: never a silently wrong number."""
-        for key, value in outputs.items():
-            if isinstance(value, float) and not math.isfinite(value):
-                self._fail(f"output {key} is {value} at t = {self._time:g} s: the model has left "
-                           f"the range where it computes (inputs or parameters too large?)")
+    def _outputs_or_nan(self) -> dict[str, Any]:
+        """The outputs now; where the model cannot give them (bad parameters, inputs it cannot
+        take), NaN with an fmi2Error log line saying why: a getter has no other way to refuse."""
+        try:
+            outputs = self.current_outputs()
+        except Exception as err:          # noqa: BLE001 - any failure is reported, none escapes
+            self._error_once(f"outputs unavailable: {_describe(err)}")
+            return {p.name: (False if p.kind == "Boolean" else math.nan)
+                    for p in (*type(self).outputs, *type(self).calculated)}
+        bad = _non_finite(outputs)
+        if bad:
+            self._error_once(f"output {bad} is {outputs[bad]} at t = {self._time:g} s: the model "
+                             f"has left the range where it computes (inputs or parameters too "
+                             f"large?)", key=f"output {bad} is {outputs[bad]}")
         return outputs
 
     # --- the model -----------------------------------------------------------------------------
     def model(self):
-        """The plain-Python model for the current parameter values (built, and checked, once)."""
+        """The plain-Python model for the current parameter values (built, and checked, once).
+        Raises FmuError naming the parameter (or the crank angle) if it cannot be built."""
         if self._model is None:
             values = {}
             for info in self._param_info:
@@ -184,13 +226,19 @@ class SewSlave(Fmi2Slave):
                 params = replace(type(self).params_class(), **values)
                 self._model = self.build_model(params)
             except (ParameterError, AssemblyError) as err:
-                self._fail(str(err))
+                raise FmuError(str(err)) from None
         return self._model
 
-    def _fail(self, message: str) -> None:
-        """Log at status fmi2Error and raise: pythonfmu turns the exception into a failed call."""
+    def _error(self, message: str) -> None:
         self.log(message, Fmi2Status.error)
-        raise FmuError(message)
+
+    def _error_once(self, message: str, key: str | None = None) -> None:
+        """Log an error, but not the same one (the same `key`) again at every getter call of a
+        host's loop."""
+        key = key or message
+        if key != self._last_error:
+            self._last_error = key
+            self._error(message)
 
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
         """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs` chain
@@ -207,60 +255,147 @@ class SewSlave(Fmi2Slave):
                 u[name] = total
         return u
 
-    def _check_inputs(self) -> None:
+    def _bad_input(self) -> str | None:
         for name, value in self._inputs.items():
-            if not math.isfinite(value):
-                self._fail(f"input {name} is {value} at t = {self._time:g} s; refusing to step")
+            if not (isinstance(value, float) and math.isfinite(value)):
+                return f"input {name} is {value} at t = {self._time:g} s"
+        return None
 
-    # --- FMI calls -----------------------------------------------------------------------------
-    # pythonfmu's get_real/set_real check every variable's type on every call; these look the
-    # getter up directly (the hot path of a co-simulation step)
+    # --- FMI calls: none lets an exception reach pythonfmu -------------------------------------
+    # pythonfmu's get_real/set_real check every variable's type on every call and raise on a
+    # wrong one; these look the getter up directly (the hot path of a co-simulation step) and
+    # answer an unknown value reference with a log line
     def get_real(self, vrs):
+        return [self._get(vr, Real, float, math.nan) for vr in vrs]
+
+    def get_integer(self, vrs):
+        return [self._get(vr, Integer, int, 0) for vr in vrs]
+
+    def get_boolean(self, vrs):
+        return [self._get(vr, Boolean, bool, False) for vr in vrs]
+
+    def get_string(self, vrs):
+        return [self._get(vr, None, str, "") for vr in vrs]
+
+    def _get(self, vr, kind, convert, missing):
+        if self._types.get(vr) is not kind:
+            self._error_once(f"fmi2Get{_KIND_NAME.get(kind, 'String')}: no such variable "
+                             f"(value reference {vr})")
+            return missing
         try:
-            getters = [self._real_get[vr] for vr in vrs]
-        except KeyError as err:
-            raise TypeError(f"variable with valueReference={err.args[0]} is not a Real") from None
-        return [float(get()) for get in getters]
+            return convert(self._getters[vr]())
+        except Exception as err:          # noqa: BLE001
+            self._error_once(f"value reference {vr}: {_describe(err)}")
+            return missing
 
     def set_real(self, vrs, values):
-        try:
-            setters = [self._real_set[vr] for vr in vrs]
-        except KeyError as err:
-            raise TypeError(f"variable with valueReference={err.args[0]} is not a settable "
-                            f"Real") from None
-        for set_value, value in zip(setters, values):
-            set_value(value)
+        self._set(vrs, values, Real)
+
+    def set_integer(self, vrs, values):
+        self._set(vrs, values, Integer)
+
+    def set_boolean(self, vrs, values):
+        self._set(vrs, values, Boolean)
+
+    def set_string(self, vrs, values):
+        self._set(vrs, values, None)
+
+    def _set(self, vrs, values, kind) -> None:
+        for vr, value in zip(vrs, values):
+            setter = self._setters.get(vr)
+            if setter is None or self._types.get(vr) is not kind:
+                name = self.vars[vr].name if vr in self.vars else f"value reference {vr}"
+                self._error(f"fmi2Set{_KIND_NAME.get(kind, 'String')}: {name} cannot be set "
+                            f"this way (value {value!r} ignored)")
+                continue
+            setter(value)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._time = float(start_time)
 
     def exit_initialization_mode(self):
-        self._check_inputs()
-        self.initialize(self.model())
+        self._initialized = True
         self._cache = None
+        try:
+            model = self.model()
+            bad = self._bad_input()
+            if bad:
+                raise FmuError(f"{bad} at initialization")
+            self.initialize(model)
+        except Exception as err:          # noqa: BLE001
+            self._broken = _describe(err)
+            self._error(f"{self._broken}; every doStep of this instance will be refused")
 
     def do_step(self, current_time, step_size):
-        self._check_inputs()
-        self.advance(self.model(), float(current_time), float(step_size))
-        self._time = float(current_time) + float(step_size)
-        self._elapsed += float(step_size)
-        self._cache = None
+        t, h = float(current_time), float(step_size)
+        refusal = self._refusal(t, h)
+        if refusal:
+            self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
+            return False
+        saved = (self.save_internal(), self._elapsed, self._time)
+        try:
+            self.advance(self.model(), t, h)
+            self._time = t + h
+            self._elapsed += h
+            self._cache = None
+            # a state that is no longer finite is not a state: the step is not taken (outputs
+            # that overflow from finite state are reported by the getters)
+            bad = _non_finite(self.save_internal())
+            if bad:
+                raise FmuError(f"{bad} would be {self.save_internal()[bad]} at t = {t + h:g} s: "
+                               f"the model has left the range where it computes (inputs or "
+                               f"parameters too large?)")
+        except Exception as err:          # noqa: BLE001 - the step is not taken, whatever failed
+            internal, self._elapsed, self._time = saved
+            self.restore_internal(internal)
+            self._cache = None
+            self._error(f"doStep({t:g}, {h:g}) discarded: {_describe(err)}")
+            return False
         return True
+
+    def _refusal(self, t: float, h: float) -> str | None:
+        """Why a doStep(t, h) cannot be taken at all, or None."""
+        if not self._initialized:
+            return "called before exitInitializationMode"
+        if self._broken:
+            return self._broken
+        if not (math.isfinite(h) and h > 0.0):
+            return f"the step size must be positive and finite, got {h!r}"
+        if not (math.isfinite(t) and abs(t - self._time)
+                <= _TIME_TOLERANCE * max(1.0, abs(t), h)):
+            return (f"the step starts at t = {t!r} s, but the last one ended at "
+                    f"t = {self._time!r} s")
+        return self._bad_input()
 
     # --- FMU state: the model's internal state is part of it -----------------------------------
     def _get_fmu_state(self) -> dict[str, Any]:
         return {"params": dict(self._params), "inputs": dict(self._inputs),
-                "elapsed": self._elapsed, "time": self._time, "internal": self.save_internal()}
+                "elapsed": self._elapsed, "time": self._time, "initialized": self._initialized,
+                "broken": self._broken, "internal": self.save_internal()}
 
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
-        if state["params"] != self._params:
-            self._model = None
-        self._params = dict(state["params"])
-        self._inputs = dict(state["inputs"])
-        self._elapsed = state["elapsed"]
-        self._time = state["time"]
-        self.restore_internal(state["internal"])
-        self._cache = None
+        try:
+            if state["params"] != self._params:
+                self._model = None
+            internal = state["internal"]
+            self._params = dict(state["params"])
+            self._inputs = dict(state["inputs"])
+            self._elapsed = state["elapsed"]
+            self._time = state["time"]
+            self._initialized = state["initialized"]
+            self._broken = state["broken"]
+            self.restore_internal(internal)
+            self._cache = None
+        except Exception as err:          # noqa: BLE001 - a damaged or foreign state
+            self._error(f"fmi2SetFMUstate: not a state of this FMU ({_describe(err)}); the "
+                        f"instance is left as it was")
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes) -> dict[str, Any]:
+        try:
+            return json.loads(state.decode("utf-8"))
+        except Exception as err:          # noqa: BLE001 - refused by _set_fmu_state
+            return {"unreadable": _describe(err)}
 
     # --- what each FMU provides ----------------------------------------------------------------
     def build_model(self, params):
@@ -334,6 +469,35 @@ class SewSlave(Fmi2Slave):
             # at initialization every unknown may depend on the parameters and inputs: no list
             SubElement(initial, "Unknown", {"index": str(index_of[port.name])})
         return root
+
+
+_KIND_NAME = {Real: "Real", Integer: "Integer", Boolean: "Boolean"}
+
+
+def _describe(err: Exception) -> str:
+    """An exception as the one line a log needs: the model's own message, or what kind of
+    failure it was."""
+    text = str(err)
+    if isinstance(err, (FmuError, ParameterError, AssemblyError)) and text:
+        return text
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def _non_finite(outputs: dict[str, Any]) -> str | None:
+    """The first output that is a NaN or infinite float, or None."""
+    for key, value in outputs.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            return key
+    return None
+
+
+def _forget_resources_path(resources: str | None) -> None:
+    """pythonfmu puts the instance's resources folder first on sys.path at every instantiation
+    (to import the FMU's script) and never takes it out: sys.path would grow with every instance,
+    and the host's later imports would find the FMU's copies first. The FMU's modules are
+    imported by now, so the entry is removed again."""
+    if resources and resources in sys.path:
+        sys.path.remove(resources)
 
 
 def fields_of(obj) -> dict[str, Any]:

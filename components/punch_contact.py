@@ -38,6 +38,9 @@ GRAVITY = 9.81
 # shortest natural period, so that a touch-and-go inside one step is not jumped over
 _SAMPLES_PER_PERIOD = 16
 _MAX_SWITCHES_PER_STEP = 64
+# bounded work per step: a step that needs more search sub-intervals than this is refused, not
+# ground through (1e6 s at the defaults would be 4e9 of them)
+MAX_SEARCH_INTERVALS = 4000
 _TIME_RESOLUTION = 1e-15           # s; bisection stops below this bracket width
 
 
@@ -85,6 +88,10 @@ class PunchOutputs:
 
 class ZenoError(RuntimeError):
     """Too many contact switches in one step (chattering that the model cannot resolve)."""
+
+
+class StepTooLong(ValueError):
+    """A step longer than the switch search can cover with bounded work."""
 
 
 class _Held:
@@ -210,10 +217,17 @@ class PunchContact:
             spring_on = self._spring_g(y, v, x0, x1) < 0.0
         t0 = 0.0
         f2_max = 0.0
+        search = self.shortest_period / _SAMPLES_PER_PERIOD
+        intervals = math.ceil(h / search)
+        if intervals > MAX_SEARCH_INTERVALS:
+            raise StepTooLong(
+                f"a step of {h:g} s needs {intervals:.3g} switch-search intervals of {search:.3g} s "
+                f"(1/{_SAMPLES_PER_PERIOD} of the punch's shortest natural period); at most "
+                f"{MAX_SEARCH_INTERVALS} per step: take steps of at most "
+                f"{MAX_SEARCH_INTERVALS * search:.3g} s")
         # a guard against an endless loop; every excursion that is not held spans a good part of
         # a search sub-interval, so the count scales with them
-        budget = _MAX_SWITCHES_PER_STEP + 4 * math.ceil(h * _SAMPLES_PER_PERIOD
-                                                        / self.shortest_period)
+        budget = _MAX_SWITCHES_PER_STEP + 4 * intervals
         for _ in range(budget):
             piece = self._piece(y, v, contact, spring_on, held, x0, x1, x2, t0)
             event = self._first_switch(piece, contact, spring_on, held, x0, x1, x2, t0, h)

@@ -1,9 +1,13 @@
 """FMUs PunchLinkage and PunchContact: the punch drive of the ultrasonic sewing machine."""
 from __future__ import annotations
 
-from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave, fields_of
+import math
+
+from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, fields_of, shaft_inputs
 from .punch_contact import PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
+
+SETUP_SPEED = 100.0         # rad/s: the punch drive's default shaft speed (the paper's first case)
 
 
 class PunchLinkageSlave(SewSlave):
@@ -11,7 +15,8 @@ class PunchLinkageSlave(SewSlave):
 
     model_name = "PunchLinkage"
     params_class = PunchLinkageParams
-    inputs = SHAFT_INPUTS
+    inputs = shaft_inputs(SETUP_SPEED)
+    experiment = (2 * math.pi / SETUP_SPEED, 2.5e-4)         # one revolution
     taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("xi", "m", "kinematic excitation of the punch: xi0 - psi", feedthrough=True),
@@ -35,11 +40,16 @@ class PunchContactSlave(SewSlave):
 
     model_name = "PunchContact"
     params_class = PunchContactParams
+    # the excitation the default linkage gives at the setup position (φ = 0, slider at its top)
+    # at the default speed: a host that starts with the start values starts the punch at rest
     inputs = (
-        Port("xi", "m", "kinematic excitation (slider side of spring 11)"),
+        Port("xi", "m", "kinematic excitation (slider side of spring 11)", start=4.5e-3),
         Port("xi_dot", "m/s", "d(xi)/dt"),
-        Port("xi_ddot", "m/s2", "d2(xi)/dt2"),
+        Port("xi_ddot", "m/s2", "d2(xi)/dt2", start=-44.87389667388663),
     )
+    # run alone, the inputs extrapolate the slider's deceleration at its top: the punch follows
+    # it down, lands on the fabric (after about 14 ms) and presses into it
+    experiment = (0.02, 1e-4)
     taylor_inputs = (("xi", "xi_dot", "xi_ddot"),)
     outputs = (
         Port("y", "m", "punch height above the fabric (< 0: pressing into it)"),

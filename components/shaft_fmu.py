@@ -1,6 +1,8 @@
 """FMU MainShaft: the shaft angle, speed and acceleration that drive every mechanism."""
 from __future__ import annotations
 
+import math
+
 from .fmi_base import Port, SewSlave
 from .shaft import MainShaft, ShaftParams
 
@@ -10,6 +12,7 @@ class MainShaftSlave(SewSlave):
 
     model_name = "MainShaft"
     params_class = ShaftParams
+    experiment = (2 * math.pi / 100.0, 2.5e-4)    # one revolution at the default speed
     outputs = (
         Port("phi", "rad", "shaft angle, cumulative (one stitch = 2π)"),
         Port("omega", "rad/s", "shaft speed"),

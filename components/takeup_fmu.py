@@ -1,8 +1,12 @@
 """FMU TakeupLinkage: the thread take-up four-bar and the path of its eye E."""
 from __future__ import annotations
 
-from .fmi_base import SHAFT_INPUTS, SHAFT_TAYLOR, Port, SewSlave
+import math
+
+from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, shaft_inputs
 from .takeup import TakeupLinkage, TakeupParams
+
+SPEED = 5000 * 2 * math.pi / 60          # the paper's 5000 rpm, in rad/s
 
 
 class TakeupLinkageSlave(SewSlave):
@@ -10,7 +14,8 @@ class TakeupLinkageSlave(SewSlave):
 
     model_name = "TakeupLinkage"
     params_class = TakeupParams
-    inputs = SHAFT_INPUTS
+    inputs = shaft_inputs(SPEED)
+    experiment = (2 * math.pi / SPEED, 2e-5)      # one revolution, 0.6° per step
     taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("E_z", "m", "take-up eye E, Z", feedthrough=True),

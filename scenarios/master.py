@@ -40,6 +40,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2CallbackAllocateMemoryTYPE, \
 from .format import Scenario, ScenarioError
 
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
+_FATAL = 4
 
 
 class CosimError(RuntimeError):
@@ -150,7 +151,7 @@ class _Unit:
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         self.log = log
         self.instantiated = False
-        self.failed = False          # a call of this instance failed: make no further calls
+        self.failed = False          # a call returned fmi2Fatal: make no further calls
         self.real_out: list[str] = []       # outputs read every step, in order
         self.bool_out: list[str] = []
         self.inputs: list[tuple[str, "_Unit", str]] = []   # (input, source unit, source output)
@@ -196,9 +197,13 @@ class _Unit:
         self._do_step = raw["fmi2DoStep"]
 
     def _check(self, function: str, status: int) -> None:
-        if status > 1:                     # worse than fmi2Warning
-            self.failed = True
-            raise FMICallException(function, status)
+        if status > 1:                     # worse than fmi2Warning: the run stops
+            # after fmi2Discard or fmi2Error the instance may still be terminated and freed;
+            # after fmi2Fatal FMI allows no call at all
+            self.failed = status >= _FATAL
+            err = FMICallException(function, status)
+            err.unit = self
+            raise err
 
     def pull_inputs(self) -> None:
         if self.n_in:
@@ -214,6 +219,18 @@ class _Unit:
             status = self._get_real(self.component, self.out_vr, self.n_out, self.out_buf)
             if status > 1:
                 self._check("fmi2GetReal", status)
+            # a NaN or infinite output stops the run here, naming its FMU (sewfmu's FMUs log
+            # why; a getter cannot refuse), rather than in the FMU it would be passed to
+            if not math.isfinite(sum(self.out_buf)):
+                bad = [n for n, x in zip(self.real_out, self.out_buf) if not math.isfinite(x)]
+                if bad:
+                    own = self.log.for_instance(self.name)
+                    if not any(line.startswith("[ERROR]") for line in own):
+                        self.log.lines.append(f"[ERROR] {self.name}: output {bad[0]} is "
+                                              f"{self.out_buf[self.real_out.index(bad[0])]}")
+                    err = FMICallException("fmi2GetReal", 3)
+                    err.unit = self
+                    raise err
         if self.n_bool:
             status = self._get_boolean(self.component, self.bool_vr, self.n_bool, self.bool_buf)
             if status > 1:
@@ -326,7 +343,8 @@ class Master:
 
     def _failure(self, err: FMICallException, when: str) -> CosimError:
         failed = [u for u in self.units if u.failed]
-        who = failed[0].name if failed else "an FMU"
+        unit = getattr(err, "unit", None) or (failed[0] if failed else None)
+        who = unit.name if unit else "an FMU"
         return CosimError(f"{who} failed during {self._phase} {when}: "
                           f"{_reason(self.log.for_instance(who), err)}")
 
@@ -394,8 +412,9 @@ class Master:
         unit.bind()
         try:
             self._set_up(unit, stop)
-        except FMICallException:
-            unit.failed = True
+        except FMICallException as err:
+            unit.failed = err.status >= _FATAL
+            err.unit = unit
             raise
 
     def _set_up(self, unit: _Unit, stop: float) -> None:
@@ -410,6 +429,12 @@ class Master:
                 fmu.setReal([v.valueReference], [float(value)])
         unit.pull_inputs()
         fmu.exitInitializationMode()
+        # sewfmu's FMUs answer bad parameters at exitInitializationMode with an fmi2Error log
+        # line (and refuse every step), not with fmi2Fatal: stop here, naming the cause
+        errors = [line for line in self.log.for_instance(unit.name) if line.startswith("[ERROR]")]
+        if errors:
+            raise CosimError(f"{unit.name} failed during initialization at t = 0 s: "
+                             f"{_reason(errors, None)}")
         unit.read_outputs()
 
     def _record(self, data: np.ndarray, row: int) -> None:

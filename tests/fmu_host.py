@@ -35,8 +35,9 @@ class Host:
         def watched(name, *args):
             try:
                 return call(name, *args)
-            except FMICallException:
-                self.failed = True
+            except FMICallException as err:
+                # after fmi2Fatal no call is allowed; after Discard or Error terminate/free are
+                self.failed = self.failed or "fatal" in str(err)
                 raise
         self.fmu._call = watched
 
