@@ -108,15 +108,13 @@ def ecos_binary(name: str = "ecos") -> Path:
 def host_environment() -> dict[str, str]:
     """What a host that is not a Python process needs to run sewfmu's FMUs: pythonfmu's binary
     is not linked to libpython, so the Python library must be preloaded, and the embedded
-    interpreter must find its standard library (PYTHONHOME) and the packages the FMUs import
-    (PYTHONPATH: numpy). LD_LIBRARY_PATH lets ecos find libtbb.so.12."""
+    interpreter must find its standard library (PYTHONHOME); the FMUs import nothing else (they
+    carry their own code and pythonfmu's). LD_LIBRARY_PATH lets ecos find libtbb.so.12."""
     import sysconfig
 
     libdir, library = sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LDLIBRARY")
-    site = sysconfig.get_paths()["purelib"]
     return {"LD_PRELOAD": os.path.join(libdir or "", library or ""),
             "PYTHONHOME": sys.base_prefix,
-            "PYTHONPATH": site,
             "LD_LIBRARY_PATH": str(Path(sys.prefix) / "lib")}
 
 
@@ -131,13 +129,11 @@ def check_host_environment(env: dict[str, str]) -> list[str]:
     elif not all(Path(p).exists() for p in libs):
         problems.append(f"LD_PRELOAD names {libs[0]}, which does not exist (a Python built "
                         f"without --enable-shared has no libpython to preload)")
-    if not env.get("PYTHONHOME") or not Path(env["PYTHONHOME"], "lib").exists():
-        problems.append("PYTHONHOME is not set to the Python installation (its lib/ holds the "
-                        "standard library the embedded interpreter needs)")
-    paths = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
-    if not any(Path(p, "numpy").exists() for p in paths):
-        problems.append("PYTHONPATH does not reach a site-packages with numpy (the FMUs "
-                        "import it)")
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    home = env.get("PYTHONHOME")
+    if not home or not (Path(home) / "lib" / version / "os.py").exists():
+        problems.append(f"PYTHONHOME is not set to a Python installation whose lib/{version} "
+                        f"holds the standard library the embedded interpreter needs")
     return problems
 
 
