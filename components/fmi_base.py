@@ -137,6 +137,10 @@ class SewSlave(Fmi2Slave):
         self._getters = {vr: v.getter for vr, v in self.vars.items()}
         self._setters = {vr: v.setter for vr, v in self.vars.items() if v.setter is not None}
         self._types = {vr: type(v) for vr, v in self.vars.items()}
+        self._real_getters = {vr: get for vr, get in self._getters.items()
+                              if self._types[vr] is Real}
+        self._real_setters = {vr: set_ for vr, set_ in self._setters.items()
+                              if self._types[vr] is Real}
 
     # --- declaration ---------------------------------------------------------------------------
     def _register_all(self) -> None:
@@ -266,7 +270,10 @@ class SewSlave(Fmi2Slave):
     # wrong one; these look the getter up directly (the hot path of a co-simulation step) and
     # answer an unknown value reference with a log line
     def get_real(self, vrs):
-        return [self._get(vr, Real, float, math.nan) for vr in vrs]
+        try:
+            return [float(self._real_getters[vr]()) for vr in vrs]
+        except Exception:                 # noqa: BLE001 - an unknown reference: answered below
+            return [self._get(vr, Real, float, math.nan) for vr in vrs]
 
     def get_integer(self, vrs):
         return [self._get(vr, Integer, int, 0) for vr in vrs]
@@ -289,7 +296,13 @@ class SewSlave(Fmi2Slave):
             return missing
 
     def set_real(self, vrs, values):
-        self._set(vrs, values, Real)
+        try:
+            setters = [self._real_setters[vr] for vr in vrs]
+        except KeyError:                  # not a settable Real: answered below
+            self._set(vrs, values, Real)
+            return
+        for set_value, value in zip(setters, values):
+            set_value(value)
 
     def set_integer(self, vrs, values):
         self._set(vrs, values, Integer)
@@ -328,8 +341,11 @@ class SewSlave(Fmi2Slave):
 
     def do_step(self, current_time, step_size):
         t, h = float(current_time), float(step_size)
-        refusal = self._refusal(t, h)
-        if refusal:
+        # the usual case in one expression (this is the hot path); the reasons only when not
+        if not (self._initialized and self._broken is None and 0.0 < h < math.inf
+                and abs(t - self._time) <= _TIME_TOLERANCE * max(1.0, abs(t), h)
+                and math.isfinite(sum(self._inputs.values()))):
+            refusal = self._refusal(t, h) or "an input is not a finite number"
             self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
             return False
         saved = (self.save_internal(), self._elapsed, self._time)
@@ -478,15 +494,23 @@ def _describe(err: Exception) -> str:
     """An exception as the one line a log needs: the model's own message, or what kind of
     failure it was."""
     text = str(err)
-    if isinstance(err, (FmuError, ParameterError, AssemblyError)) and text:
+    # the models' own exceptions (parameters, assembly, step too long, chatter) say it for users
+    if type(err).__module__.rpartition(".")[0] == __name__.rpartition(".")[0] and text:
         return text
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
-def _non_finite(outputs: dict[str, Any]) -> str | None:
-    """The first output that is a NaN or infinite float, or None."""
-    for key, value in outputs.items():
-        if isinstance(value, float) and not math.isfinite(value):
+def _non_finite(values: dict[str, Any]) -> str | None:
+    """The first of the values (numbers, or lists of numbers) that is or holds a NaN or an
+    infinite float, or None."""
+    try:
+        if math.isfinite(sum(values.values())):   # the common case, in one C loop
+            return None
+    except TypeError:                             # lists among the values
+        pass
+    for key, value in values.items():
+        items = value if isinstance(value, (list, tuple)) else (value,)
+        if any(isinstance(x, float) and not math.isfinite(x) for x in items):
             return key
     return None
 

@@ -40,5 +40,6 @@ def _stack(results: list, shape: tuple) -> Any:
     if isinstance(first, dict):
         return {key: _stack([r[key] for r in results], shape) for key in first}
     if isinstance(first, tuple):
-        return tuple(_stack([r[i] for r in results], shape) for i in range(len(first)))
+        items = [_stack([r[i] for r in results], shape) for i in range(len(first))]
+        return type(first)(*items) if hasattr(first, "_fields") else tuple(items)
     return np.asarray(results).reshape(shape)
