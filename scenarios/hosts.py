@@ -47,15 +47,26 @@ def _run_libcosim(ssp: str, step: float, stop: float, record: list[str]):
     n_steps = int(np.ceil(stop / step - 1e-9))
     rows = []
     for k in range(n_steps):
-        execution.step()
+        if not execution.step():
+            raise HostError(f"libcosim could not take the step to t = {(k + 1) * step_ns * 1e-9:g} "
+                            f"s: an FMU refused it (fmi2Discard or fmi2Error)")
         row = [(k + 1) * step_ns * 1e-9]
         for index, ref, boolean in readers:
             if boolean:
                 row.append(float(observer.last_boolean_values(index, [ref])[0]))
             else:
                 row.append(observer.last_real_values(index, [ref])[0])
+        _refuse_non_finite(row, record, "libcosim")
         rows.append(row)
     return rows
+
+
+def _refuse_non_finite(row: list[float], record: list[str], host: str) -> None:
+    """A host that goes on after an FMU refused its step (ecos does) records NaN: stop there."""
+    bad = [name for name, value in zip(record, row[1:]) if not np.isfinite(value)]
+    if bad:
+        raise HostError(f"{host}: {bad[0]} is {row[1 + record.index(bad[0])]} at t = {row[0]:g} "
+                        f"s (the FMU refused its step or could not compute it: see its log)")
 
 
 def _load_tbb() -> None:
@@ -86,6 +97,7 @@ def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
     for k in range(n_steps):
         sim.step()
         rows.append([sim.get_time()] + [float(get(identifier)) for get, identifier in getters])
+        _refuse_non_finite(rows[-1], record, "ecos")
     return rows
 
 
@@ -216,7 +228,11 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
                            str(out_csv)], capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
     if error_file.exists():
-        raise HostError(f"{host}: {error_file.read_text().strip()}")
+        # the FMU's own words, as the host logged them (libcosim: "... logStatusError] text")
+        said = [line.rsplit("] ", 1)[-1] for line in proc.stderr.splitlines()
+                if "logStatusError" in line]
+        cause = f"; the FMU said: {said[0]}" if said else ""
+        raise HostError(f"{host}: {error_file.read_text().strip()}{cause}")
     if proc.returncode != 0:
         tail = " ".join((proc.stderr or proc.stdout).strip().splitlines()[-2:])
         raise HostError(f"{host} exited with status {proc.returncode}: {tail or 'no message'}")
