@@ -1,18 +1,23 @@
 """The FMUs as FMI components: validation, the co-simulation contract, parameter and input
 checks, state save and restore, and running from the .fmu file alone."""
 import json
+import math
 import os
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import pytest
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
+from components.carriage import CarriageDrive
 from components.catalogue import FMUS
 from components.punch_contact import GRAVITY, PunchContactParams
 from components.punch_linkage import PunchLinkage
+from components.shaft import MainShaft
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
@@ -297,3 +302,61 @@ def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_di
                           timeout=300, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip().splitlines()[-1] == "True"
+
+
+# --- at home in any FMI tool --------------------------------------------------------------------
+_STDLIB_ONLY = """
+import sys
+sys.path.insert(0, sys.argv[1])
+module = open(sys.argv[1] + "/slavemodule.txt").read().strip()
+script = __import__(module)
+slave = getattr(script, sys.argv[2])(instance_name="probe", resources=sys.argv[1])
+slave.enter_initialization_mode()
+slave.exit_initialization_mode()
+assert slave.do_step(0.0, 1e-4), slave.log_queue
+assert "numpy" not in sys.modules
+print("ok")
+"""
+
+
+@pytest.mark.parametrize("name", ["MainShaft", "PunchLinkage", "PunchContact", "TakeupLinkage",
+                                  "FeedLinkage", "CarriageDrive", "CarriageModal"])
+def test_the_code_an_fmu_carries_runs_on_the_standard_library_alone(fmu_paths, tmp_path, name):
+    """python -S -I: no site-packages, no environment: only the FMU's resources folder."""
+    with zipfile.ZipFile(fmu_paths[name]) as zf:
+        zf.extractall(tmp_path)
+    proc = subprocess.run([sys.executable, "-S", "-I", "-c", _STDLIB_ONLY,
+                           str(tmp_path / "resources"), name], capture_output=True, text=True,
+                          timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+
+
+def test_model_description_declares_no_execution_tool_and_a_default_experiment(fmu_paths):
+    for name, path in fmu_paths.items():
+        md = read_model_description(str(path))
+        assert md.coSimulation.needsExecutionTool is False, name
+        assert md.defaultExperiment is not None, name
+        assert float(md.defaultExperiment.stopTime) > 0 < float(md.defaultExperiment.stepSize), name
+
+
+def _starts(path):
+    return {v.name: float(v.start) for v in read_model_description(str(path)).modelVariables
+            if v.causality == "input"}
+
+
+def test_input_start_values_are_the_default_setup(fmu_paths):
+    """A host that starts the connections at the start values starts at rest: each input's start
+    value is what its default source gives at t = 0 (computed here from the models)."""
+    shaft = MainShaft().state(0.0)
+    for linkage, speed in (("PunchLinkage", shaft[1]), ("FeedLinkage", 303.5),
+                           ("TakeupLinkage", 5000 * 2 * math.pi / 60),
+                           ("CarriageDrive", 1600 * 2 * math.pi / 60)):
+        assert _starts(fmu_paths[linkage]) == pytest.approx(
+            {"phi": 0.0, "omega": speed, "epsilon": 0.0}), linkage
+    e = PunchLinkage().excitation(*shaft)
+    assert _starts(fmu_paths["PunchContact"]) == pytest.approx(
+        {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}, rel=1e-12, abs=1e-12)
+    omega = 1600 * 2 * math.pi / 60
+    _, _, a, jerk = CarriageDrive().motion(0.0, omega, 0.0)
+    assert _starts(fmu_paths["CarriageModal"]) == pytest.approx(
+        {"a_base": a, "a_base_dot": jerk}, rel=1e-12)
