@@ -1,4 +1,4 @@
-"""Carriage of a sewing semi-automat's coordinate device: a 2-DOF modal model (MECHANISMS.md §2).
+"""Carriage of a sewing semi-automat's coordinate device: a 2-DOF modal model (docs/carriage.md).
 
 While it accelerates, the carriage bears on one guide, a cantilever of length l clamped to the
 traverse at z = 0 (bending stiffness EJ, mass m_n spread uniformly). The carriage (mass m_k,

@@ -1,4 +1,4 @@
-"""Closed lever-hinge material feed mechanism of a sewing machine (MECHANISMS.md §3).
+"""Closed lever-hinge material feed mechanism of a sewing machine (docs/feed.md).
 
 One crank shaft at A drives two branches. Lift branch: arm A-B, rod 2 (B-C), lever 3 rocking
 about D (arms D-C and D-E). Feed branch: arm A-K, rod 8 (K-N), bell crank 7 rocking about G

@@ -1,7 +1,7 @@
 """Punch body of the ultrasonic sewing machine: one mass between springs and the fabric.
 
 y is the punch's height above the fabric surface (y < 0: pressing into it), xi(t) the kinematic
-excitation from the linkage, Delta = xi - y the deformation of spring 11 (MECHANISMS.md §1b):
+excitation from the linkage, Delta = xi - y the deformation of spring 11 (docs/punch_drive.md):
 
     m·y'' = -F1 + F2 + F3 - m·g
     F1 = F10 + c1·y + b1·y'                                  closing spring 6

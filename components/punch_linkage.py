@@ -1,7 +1,7 @@
 """Punch drive of the ultrasonic sewing machine: the six-bar linkage that lifts the punch.
 
 Crank O1A turns with the main shaft, coupler AB rocks the bell-crank B-O2-C, and rod CD drives the
-slider D along the vertical line x = x_D (MECHANISMS.md §1a). The slider's fall from its highest
+slider D along the vertical line x = x_D (docs/punch_drive.md). The slider's fall from its highest
 point is the displacement function psi(phi) >= 0; the punch's kinematic excitation is
 xi = xi0 - psi, its height above the fabric when it follows the slider.
 

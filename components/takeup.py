@@ -1,4 +1,4 @@
-"""Thread take-up four-bar of an industrial sewing machine (MECHANISMS.md §4).
+"""Thread take-up four-bar of an industrial sewing machine (docs/takeup.md).
 
 Crank AB turns with the main shaft, coupler BC drives rocker CD about the frame pivot D, and the
 take-up eye E, a point of the coupler triangle BCE, traces the "willow-leaf" path that feeds and

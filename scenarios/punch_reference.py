@@ -2,7 +2,7 @@
 
 Independent of the co-simulation on purpose: the excitation is the linkage's exact kinematics at
 the shaft angle phi(t) (no Taylor extrapolation), the force law is written here again from
-MECHANISMS.md §1b, and the punch is integrated numerically (solve_ivp, DOP853 by default) with
+docs/punch_drive.md, and the punch is integrated numerically (solve_ivp, DOP853 by default) with
 the contact and spring switches located as terminal events, restarting in the new mode. Where a
 preloaded compression-only spring 11 holds the punch on its stop, the punch moves with the exact
 excitation until the stop force leaves [0, F30] (found by scanning and brentq).
@@ -126,7 +126,7 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
 
 
 # --- the punch held on the stop of a preloaded compression-only spring 11 ------------------------
-# (MECHANISMS.md §1b gives F3 a jump from 0 to F30 at Delta = 0; components/punch_contact.py
+# (the paper's spring 11 gives F3 a jump from 0 to F30 at Delta = 0; components/punch_contact.py
 # explains why the punch is then held on the stop. Written here again for the reference.)
 
 def _stop_force(p, y, v, xi_ddot, contact):
