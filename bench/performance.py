@@ -25,16 +25,17 @@ from components.build import ensure_built
 from components.catalogue import FMUS
 from scenarios.format import Connection, Instance, Scenario, load
 from scenarios.master import run
-from scenarios.runner import reference_summary, simulate, summarize
+from scenarios.runner import monolithic_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
 import math
-from scenarios import punch, punch_reference
+from scenarios import punch_monolithic
+from scenarios.analyses import punch
 t_end = 10 * 2 * math.pi / 100.0
-ref = punch_reference.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,
+ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,
                             sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-8, atol=1e-11)
-print(punch.summary_of_reference(ref))
+print(punch.summary_of_monolithic(ref))
 """
 
 
@@ -56,7 +57,7 @@ def whole_process(repeat: int) -> None:
         t_mono.append(_wall(mono))
     a, b = statistics.median(t_cosim), statistics.median(t_mono)
     fig = summarize(simulate(load("punch_drive")))
-    ref, _ = reference_summary(load("punch_drive"))
+    ref, _ = monolithic_summary(load("punch_drive"))
     print("1. punch_drive, whole process (median of", repeat, "alternating runs)")
     print("| process | wall [s] |\n|---|---|")
     print(f"| sewfmu run punch_drive (co-simulation, 3 FMUs, step 2.5e-4 s) | {a:.3f} |")
@@ -164,7 +165,7 @@ STEPS = (2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4)
 
 
 def time_to_accuracy() -> None:
-    ref, _ = reference_summary(load("punch_drive"))
+    ref, _ = monolithic_summary(load("punch_drive"))
     rows = []
     print("3. time to accuracy, punch_drive (10 revolutions), against the reference")
     print("| master | step [s] | wall [s] | error F2_weld_mean [N] | error contact duration [°] |")

@@ -10,10 +10,9 @@ import argparse
 
 import numpy as np
 
-from scenarios import punch_reference
+from scenarios import punch_monolithic
 from scenarios.format import load
-from scenarios.master import stop_time
-from scenarios.runner import reference_summary, simulate, summarize
+from scenarios.runner import monolithic_summary, simulate, summarize
 
 STEPS = (1e-3, 5e-4, 2.5e-4, 1e-4, 5e-5)
 
@@ -23,8 +22,8 @@ def main():
     parser.add_argument("--master", default="jacobi")
     args = parser.parse_args()
     base = load("punch_drive")
-    ref, ref_wall = reference_summary(base)
-    t_end = stop_time(base)
+    ref, ref_wall = monolithic_summary(base)
+    t_end = base.end_time()
     print(f"punch_drive, {base.revolutions:g} revolutions, master {args.master}; reference "
           f"{ref_wall:.2f} s wall")
     print("| step [s] | onset [°] | loss [°] | duration [°] | F2_peak [N] | F2_weld_mean [N] "
@@ -35,7 +34,7 @@ def main():
         sc.step, sc.master = h, args.master
         result = simulate(sc)
         fig = summarize(result)
-        dense = punch_reference.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
+        dense = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
                                       sample_switches=False)
         n = len(result.time) - 1
         dy = np.max(np.abs(result["punch.y"][:n] - dense.y[:n]))

@@ -18,6 +18,11 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
+# The installed pythonfmu, imported before any FMU is instantiated in this process: an FMU imports
+# the pythonfmu it finds, and if that were its embedded copy (no binaries), that copy would stay
+# in sys.modules and serve the builds made afterwards.
+import pythonfmu  # noqa: F401
+
 from .catalogue import FMUS
 
 PACKAGE_DIR = Path(__file__).resolve().parent

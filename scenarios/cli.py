@@ -76,7 +76,7 @@ def cmd_compare(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from .runner import ANALYSES
+    from . import analyses
     from .sweep import parse_grid_option, plot_table, points_of, run_sweep
 
     scenario = _load_with_sets(args.scenario, args.set)
@@ -89,9 +89,9 @@ def cmd_sweep(args) -> None:
     print(f"{scenario.name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
     for row in failed:
         print(f"  failed: {row['key']}: {row['error']}")
-    if args.plot and scenario.analysis in ANALYSES:
+    if args.plot and scenario.analysis:
         swept = [name for name, _ in points[0].values]
-        figures = [f for f in getattr(ANALYSES[scenario.analysis], "FIGURES", ())
+        figures = [f for f in getattr(analyses.module(scenario.analysis), "FIGURES", ())
                    if f != "n_contacts"]
         plot_table(rows, swept, figures, out / f"{scenario.name}_sweep.png", scenario.description)
 

@@ -1,13 +1,16 @@
 """The scenario file: a small TOML that names FMU instances, connections and the experiment.
 
     description = "..."
-    analysis = "punch"                      # key figures and plots: scenarios/punch.py
+    analysis = "punch"                      # key figures and plots: scenarios/analyses/punch.py
+    roles = { punch = "ram" }               # optional: which instance plays which of the
+                                            # analysis's roles (others are found by FMU type)
     connections = ["shaft.phi -> linkage.phi", ...]
     record = ["punch.y", ...]               # optional; default: every output
 
     [experiment]
     revolutions = 10                        # or stop_time = 0.5 (s)
-    shaft = "shaft"                         # the MainShaft instance whose turns are counted
+    shaft = "shaft"                         # optional: the MainShaft instance whose turns are
+                                            # counted (default: the analysis's shaft)
     step = 2.5e-4                           # communication step (s)
     master = "jacobi"                       # or "gauss-seidel"
     record_every = 1                        # optional: keep every n-th point (long runs)
@@ -35,6 +38,8 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
+
+from components.catalogue import FMUS
 
 MASTERS = ("jacobi", "gauss-seidel")
 
@@ -78,9 +83,25 @@ class Scenario:
     compare: dict[str, Any] | None
     sweep: dict[str, Any] | None = None
     record_every: int = 1             # record every n-th communication point (long runs)
+    roles: dict[str, str] = field(default_factory=dict)   # the analysis's role -> instance
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
+
+    def end_time(self) -> float:
+        """The run's end: experiment.stop_time, or the time the shaft instance needs for
+        experiment.revolutions with its parameters (its speed ramp included)."""
+        if self.stop_time is not None:
+            return self.stop_time
+        from components.parameters import ParameterError, with_values
+        from components.shaft import MainShaft, ShaftParams
+
+        inst = self.instances[self.shaft]
+        try:
+            params = with_values(ShaftParams(), **inst.parameters)
+        except ParameterError as err:
+            raise ScenarioError(f"{self.source}: {self.shaft}: {err}") from None
+        return MainShaft(params).time_of_angle(2 * math.pi * self.revolutions)
 
     def set_value(self, target: str, value: Any, origin: str = "--set") -> None:
         """Apply `instance.parameter = value` (or `experiment.key = value`)."""
@@ -181,8 +202,8 @@ def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
 
 
 def from_dict(data: dict, name: str, source: str) -> Scenario:
-    known_top = {"description", "analysis", "connections", "record", "experiment", "instances",
-                 "compare", "sweep"}
+    known_top = {"description", "analysis", "roles", "connections", "record", "experiment",
+                 "instances", "compare", "sweep"}
     for key in data:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
@@ -211,6 +232,8 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         params = spec.get("parameters", {})
         if not isinstance(params, dict):
             raise ScenarioError(f"{where}.parameters must be a table")
+        if spec["fmu"] not in FMUS:
+            raise ScenarioError(f"{where}: unknown FMU {spec['fmu']!r} (known: {', '.join(FMUS)})")
         inst = Instance(inst_name, spec["fmu"], {})
         instances[inst_name] = inst
     scenario = Scenario(
@@ -230,10 +253,19 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,
                                origin=f"{source}: instances.{inst_name}.parameters")
+    scenario.roles = _bind_roles(data, instances, source)
     if scenario.revolutions is not None:
+        if scenario.shaft is None:         # the analysis's shaft, or the only MainShaft
+            shafts = [n for n, inst in instances.items() if inst.fmu == "MainShaft"]
+            scenario.shaft = scenario.roles.get("shaft") or (shafts[0] if len(shafts) == 1
+                                                             else None)
         if scenario.shaft not in instances:
             raise ScenarioError(f"{source}: experiment.shaft must name the MainShaft instance "
                                 f"whose revolutions are counted, got {scenario.shaft!r}")
+        if instances[scenario.shaft].fmu != "MainShaft":
+            raise ScenarioError(f"{source}: experiment.shaft names {scenario.shaft!r}, an instance "
+                                f"of {instances[scenario.shaft].fmu}: revolutions are counted on a "
+                                f"MainShaft instance")
     connections = data.get("connections", [])
     if not isinstance(connections, list):
         raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
@@ -253,6 +285,25 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     if scenario.sweep is not None:
         _check_sweep(scenario.sweep, source)
     return scenario
+
+
+def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict[str, str]:
+    """The analysis's roles bound to instances (see scenarios/analyses), or {} without one."""
+    from .analyses import RoleError, bind
+
+    analysis, given = data.get("analysis"), data.get("roles", {})
+    if analysis is None:
+        if given:
+            raise ScenarioError(f"{source}: roles without an analysis")
+        return {}
+    if not isinstance(analysis, str):
+        raise ScenarioError(f"{source}: analysis must be a name, got {analysis!r}")
+    if not isinstance(given, dict) or not all(isinstance(v, str) for v in given.values()):
+        raise ScenarioError(f"{source}: roles must be a table of role = \"instance\"")
+    try:
+        return bind(analysis, {name: inst.fmu for name, inst in instances.items()}, given)
+    except RoleError as err:
+        raise ScenarioError(f"{source}: {err}") from None
 
 
 def _check_sweep(sweep: Any, source: str) -> None:

@@ -151,7 +151,6 @@ def check_host_environment(env: dict[str, str]) -> list[str]:
 
 def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout: float = 600.0):
     """Run the .ssp with the `ecos` command-line tool; return (time, columns, wall)."""
-    from .master import stop_time
     from .ssp import PARAMETER_SET
 
     env = {**os.environ, **host_environment()}
@@ -165,7 +164,7 @@ def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout:
     proc = subprocess.run([str(ecos_binary()), "simulate", "--path", str(Path(ssp).resolve()),
                            "--stepSize", repr(scenario.step),
                            # one step beyond: the caller cuts the record at the stop time exactly
-                           "--stopTime", repr(stop_time(scenario) + scenario.step),
+                           "--stopTime", repr(scenario.end_time() + scenario.step),
                            "--parameterSet", PARAMETER_SET, "--noParallel", "-l", "warn"],
                           cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
@@ -212,7 +211,6 @@ def child_main(argv: list[str]) -> None:
 def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path,
                 timeout: float = 600.0):
     """Run the .ssp in the other host (child process); return (time, columns, wall)."""
-    from .master import stop_time
 
     if host not in HOSTS:
         raise HostError(f"unknown host {host!r} (hosts: {', '.join(HOSTS)})")
@@ -224,7 +222,7 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
     error_file.unlink(missing_ok=True)
     started = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "scenarios.hosts", host, str(ssp),
-                           repr(scenario.step), repr(stop_time(scenario)), json.dumps(record),
+                           repr(scenario.step), repr(scenario.end_time()), json.dumps(record),
                            str(out_csv)], capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
     if error_file.exists():

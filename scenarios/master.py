@@ -58,12 +58,6 @@ class RunResult:
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
 
-    def last_revolution(self, shaft: str = "shaft") -> np.ndarray:
-        """Mask of the samples in the shaft's last revolution (one stitch): the window every
-        analysis reads its key figures from."""
-        phi = self.columns[f"{shaft}.phi"]
-        return phi >= phi[-1] - 2 * math.pi - 1e-12
-
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Master._free), so it is loaded from one place only.
@@ -96,10 +90,6 @@ def instantiate(fmu: FMU2Slave, log: "LogCollector") -> None:
     lacks the binaries the builder needs) and sys.path would grow with every instance. The FMU
     has imported its code by then, so sys.path is put back.
     """
-    # The installed pythonfmu first: an FMU imports the pythonfmu it finds, and if that were the
-    # FMU's embedded copy (no binaries), it would stay in sys.modules and serve later builds.
-    import pythonfmu  # noqa: F401
-
     saved_path = list(sys.path)
     try:
         fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
@@ -276,7 +266,7 @@ class Master:
     def open(self) -> None:
         """Load the FMUs, initialize them in dependency order, record the initial point."""
         sc = self.scenario
-        self.stop = stop_time(sc)
+        self.stop = sc.end_time()
         if sc.step > self.stop:
             raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
                                 f"run ({self.stop:g} s)")
@@ -492,21 +482,6 @@ def _dependency_order(units: list[_Unit], sc: Scenario) -> list[_Unit]:
             placed.add(u.name)
             remaining.remove(u)
     return order
-
-
-def stop_time(sc: Scenario) -> float:
-    """The run's end: stop_time, or the time the shaft needs for the given revolutions."""
-    if sc.stop_time is not None:
-        return sc.stop_time
-    from components.parameters import ParameterError, with_values
-    from components.shaft import MainShaft, ShaftParams
-
-    inst = sc.instances[sc.shaft]
-    try:
-        params = with_values(ShaftParams(), **inst.parameters)
-    except ParameterError as err:
-        raise ScenarioError(f"{sc.source}: {sc.shaft}: {err}") from None
-    return MainShaft(params).time_of_angle(2 * math.pi * sc.revolutions)
 
 
 def run(scenario: Scenario, fmu_paths: dict[str, Path]) -> RunResult:

@@ -4,7 +4,6 @@ These are the functions behind the command line; they are meant to be called fro
 """
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import os
@@ -18,27 +17,9 @@ import numpy as np
 
 from components.build import default_fmu_dir, ensure_built
 
+from . import analyses
 from .format import Scenario, ScenarioError
-from .master import RunResult, run, stop_time
-
-
-class _Analyses(dict):
-    """What each scenario's `analysis` key selects (key figures and plots): a module of this
-    package, imported when first used (start-up time counts in a short run)."""
-
-    NAMES = ("punch", "takeup", "feed", "carriage")
-
-    def __missing__(self, name: str):
-        if name not in self.NAMES:
-            raise KeyError(name)
-        self[name] = importlib.import_module(f"{__package__}.{name}")
-        return self[name]
-
-    def __contains__(self, name) -> bool:
-        return name in self.NAMES
-
-
-ANALYSES = _Analyses()
+from .master import RunResult, run
 
 
 def _feed_headline(study: dict) -> dict:
@@ -83,7 +64,7 @@ def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
     """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
     and, with plot, NAME.png; return the headline figures."""
     study, out_dir = STUDIES[name], Path(out_dir)
-    module = ANALYSES[study.module]
+    module = analyses.module(study.module)
     data = getattr(module, study.compute)()
     headline = study.headline(data)
     write_json(data, out_dir / "study.json")
@@ -115,8 +96,8 @@ def simulate(scenario: Scenario, fmu_dir: Path | None = None) -> RunResult:
 def summarize(result: RunResult) -> dict:
     sc = result.scenario
     figures = {}
-    if sc.analysis in ANALYSES:
-        figures = ANALYSES[sc.analysis].summary_of_run(result)
+    if sc.analysis:
+        figures = analyses.module(sc.analysis).summary_of_run(result)
     return {"scenario": sc.name, "master": sc.master, "step": sc.step,
             "stop_time": float(result.time[-1]), "wall_time_s": round(result.wall_time, 4),
             **figures}
@@ -127,7 +108,7 @@ def _write_atomic(path: Path, write) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
-        with os.fdopen(fd, "w", newline="") as f:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as f:
             write(f)
         os.replace(tmp, path)
     except BaseException:
@@ -178,39 +159,40 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
         write_json(summary, out_dir / "summary.json")
     else:
         summary = runs[0][2]
-    if plot and scenario.analysis in ANALYSES:
+    if plot and scenario.analysis:
         curves = [(label or scenario.name, result) for label, result, _ in runs]
-        ANALYSES[scenario.analysis].plot(curves, out_dir / f"{scenario.name}.png",
-                                         scenario.description)
+        analyses.module(scenario.analysis).plot(curves, out_dir / f"{scenario.name}.png",
+                                                scenario.description)
     return summary
 
 
-def reference_summary(scenario: Scenario) -> tuple[dict, float]:
-    """Key figures of the monolithic reference (DOP853, tight tolerances) and its wall time."""
+def monolithic_summary(scenario: Scenario) -> tuple[dict, float]:
+    """Key figures of the monolithic solution (the punch drive as one ODE, DOP853, tight
+    tolerances) and its wall time."""
     if scenario.analysis != "punch":
-        raise ScenarioError(f"{scenario.source}: no monolithic reference for analysis "
+        raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
-    from . import punch, punch_reference
+    from . import punch_monolithic
 
-    params = {inst.fmu: dict(inst.parameters) for inst in scenario.instances.values()}
-    t_end = stop_time(scenario)
-    omega = params["MainShaft"].get("omega0", 100.0)
+    params = {role: dict(scenario.instances[name].parameters)
+              for role, name in scenario.roles.items()}
+    t_end = scenario.end_time()
+    omega = params["shaft"].get("omega0", 100.0)
     started = clock.perf_counter()
-    ref = punch_reference.solve(params["MainShaft"], params.get("PunchLinkage", {}),
-                                params.get("PunchContact", {}), t_end,
-                                sample_step=math.radians(0.01) / omega,
-                                sample_from=max(0.0, t_end - 2.2 * math.pi / omega))
+    solution = punch_monolithic.solve(params["shaft"], params["linkage"], params["punch"], t_end,
+                                      sample_step=math.radians(0.01) / omega,
+                                      sample_from=max(0.0, t_end - 2.2 * math.pi / omega))
     wall = clock.perf_counter() - started
-    return punch.summary_of_reference(ref), wall
+    return analyses.module("punch").summary_of_monolithic(solution), wall
 
 
 def compare(scenario: Scenario, fmu_dir: Path | None = None) -> list[tuple[str, object, object, object]]:
     """Rows (figure, co-simulation, reference, difference), plus the wall times."""
     result = simulate(scenario, fmu_dir)
     cosim = summarize(result)
-    ref, ref_wall = reference_summary(scenario)
+    ref, ref_wall = monolithic_summary(scenario)
     rows = []
-    for key in ANALYSES["punch"].FIGURES:
+    for key in analyses.module("punch").FIGURES:
         a, b = cosim.get(key), ref.get(key)
         diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
         rows.append((key, a, b, diff))
@@ -248,7 +230,7 @@ def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | Non
     own = simulate(scenario, fmu_dir)
     time, columns, wall = run_in_host(host, ssp, scenario, list(own.columns),
                                       out_dir / "results.csv")
-    time, columns = _end_at(time, columns, stop_time(scenario))
+    time, columns = _end_at(time, columns, scenario.end_time())
     other = RunResult(scenario, time, columns, wall)
     write_csv(other, out_dir / "results.csv")
     mine, theirs = summarize(own), summarize(other)

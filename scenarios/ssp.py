@@ -15,10 +15,9 @@ from xml.etree import ElementTree as ET
 
 from fmpy import read_model_description
 
-from components.fmi_base import UNITS
+from components.units import UNITS
 
 from .format import Scenario
-from .master import stop_time
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -80,7 +79,7 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
         unit = ET.SubElement(units, _q(SSC, "Unit"), {"name": name})
         ET.SubElement(unit, _q(SSC, "BaseUnit"), {k: str(v) for k, v in UNITS[name].items()})
     ET.SubElement(root, _q(SSD, "DefaultExperiment"),
-                  {"startTime": "0", "stopTime": repr(stop_time(scenario))})
+                  {"startTime": "0", "stopTime": repr(scenario.end_time())})
     ET.indent(root)
     return ET.ElementTree(root)
 

@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
 from components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
-from scenarios.carriage import periodic_response, resonance_study
+from scenarios.analyses.carriage import periodic_response, resonance_study
 from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize

@@ -7,7 +7,7 @@ import pytest
 
 from components.feed import FeedLinkage, FeedParams
 from components.kinematics import AssemblyError
-from scenarios.feed import ratio_study
+from scenarios.analyses.feed import ratio_study
 from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize

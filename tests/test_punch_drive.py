@@ -6,16 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from scenarios import punch_reference
+from scenarios import punch_monolithic
 from scenarios.cli import main
 from scenarios.format import load
 from scenarios.master import run
-from scenarios.runner import reference_summary, summarize
+from scenarios.runner import monolithic_summary, summarize
 
 
 @pytest.fixture(scope="module")
 def reference():
-    return reference_summary(load("punch_drive"))[0]
+    return monolithic_summary(load("punch_drive"))[0]
 
 
 @pytest.mark.parametrize("master", ["jacobi", "gauss-seidel"])
@@ -37,7 +37,7 @@ def _trajectory_error(fmu_paths, master, h, revolutions=3):
     sc.master, sc.step, sc.revolutions = master, h, revolutions
     result = run(sc, fmu_paths)
     t_end = result.time[-1]
-    ref = punch_reference.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
+    ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
                                 sample_switches=False)
     n = len(result.time) - 1              # the last step may be shorter: compare the grid
     assert np.allclose(ref.time[:n], result.time[:n], rtol=0, atol=1e-12)
@@ -66,7 +66,7 @@ def test_punch_held_on_a_preloaded_stop_matches_the_reference(fmu_paths):
     for name, value in punch.items():
         sc.set_value(f"punch.{name}", value)
     result = run(sc, fmu_paths)
-    ref = punch_reference.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=h,
+    ref = punch_monolithic.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=h,
                                 sample_switches=False)
     n = len(result.time) - 1
     assert 0.5 < np.mean(ref.held[:n]) < 0.9

@@ -12,7 +12,7 @@ from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize
 from scenarios.sampling import sampled
-from scenarios.takeup import central_difference_velocity, path_stroke, tolerance_study
+from scenarios.analyses.takeup import central_difference_velocity, path_stroke, tolerance_study
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 

@@ -1,4 +1,4 @@
-"""Monolithic reference of the punch drive: the same physics as one ODE, solved by scipy.
+"""The monolithic solution of the punch drive: the same physics as one ODE, solved by scipy.
 
 Independent of the co-simulation on purpose: the excitation is the linkage's exact kinematics at
 the shaft angle phi(t) (no Taylor extrapolation), the force law is written here again from
@@ -25,7 +25,7 @@ from .sampling import sampled
 
 
 @dataclass
-class ReferenceSolution:
+class MonolithicSolution:
     time: np.ndarray
     phi: np.ndarray
     y: np.ndarray
@@ -40,7 +40,7 @@ class ReferenceSolution:
 
 def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: float,
           sample_from: float = 0.0, method: str = "DOP853", rtol: float = 1e-10,
-          atol: float = 1e-13, sample_switches: bool = True) -> ReferenceSolution:
+          atol: float = 1e-13, sample_switches: bool = True) -> MonolithicSolution:
     """Solve the punch drive from the setup position to t_end; sample the solution every
     sample_step from sample_from on, and at the switch instants if sample_switches."""
     sh = MainShaft(with_values(ShaftParams(), **shaft))
@@ -189,7 +189,7 @@ def _riding(excitation):
 
 
 def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches,
-            n_rhs) -> ReferenceSolution:
+            n_rhs) -> MonolithicSolution:
     k0 = int(math.ceil(sample_from / sample_step - 1e-9))
     k1 = int(math.floor(t_end / sample_step + 1e-9))
     # the switch instants are samples too: the impact force is a jump at the onset
@@ -215,5 +215,5 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
         f3 = np.maximum(f3, 0.0)
     f1 = p.F10 + p.c1 * y + p.b1 * v
     f3 = np.where(held, p.m * (e.xi_ddot + GRAVITY) + f1 - f2, f3)
-    return ReferenceSolution(times, motion[:, 0], y, v, f2, f3, contact, held, list(switches),
+    return MonolithicSolution(times, motion[:, 0], y, v, f2, f3, contact, held, list(switches),
                              n_rhs)

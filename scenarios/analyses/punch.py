@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 
+from . import column, last_revolution
+
 FIGURES = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "n_contacts",
            "F2_peak", "F2_weld_mean")
 
@@ -91,13 +93,15 @@ def _mean_between(x: np.ndarray, f: np.ndarray, a: float, b: float) -> float:
     return float(np.trapezoid(fs, xs) / (b - a))
 
 
-def summary_of_run(result, shaft="shaft", punch="punch") -> dict:
-    return summary(result[f"{shaft}.phi"], result[f"{punch}.y"], result[f"{punch}.F2"],
-                   result[f"{punch}.contact"], result.columns.get(f"{punch}.F2_max"))
+def summary_of_run(result) -> dict:
+    punch = result.scenario.roles["punch"]
+    return summary(column(result, "shaft", "phi"), column(result, "punch", "y"),
+                   column(result, "punch", "F2"), column(result, "punch", "contact"),
+                   result.columns.get(f"{punch}.F2_max"))
 
 
-def summary_of_reference(ref) -> dict:
-    return summary(ref.phi, ref.y, ref.F2, ref.contact)
+def summary_of_monolithic(solution) -> dict:
+    return summary(solution.phi, solution.y, solution.F2, solution.contact)
 
 
 # --- plots ------------------------------------------------------------------------------------
@@ -109,12 +113,12 @@ def plot(curves, path, title: str) -> None:
 
     fig, (ax_y, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     for label, result in curves:
-        mask = result.last_revolution()
-        phi = result["shaft.phi"]
+        mask = last_revolution(result)
+        phi = column(result, "shaft", "phi")
         deg = np.degrees(phi[mask] - (phi[-1] - 2 * math.pi))
-        ax_y.plot(deg, result["punch.y"][mask] * 1e3, label=label)
-        ax_f.plot(deg, result["punch.F2"][mask], label=label)
-    ax_y.plot(deg, result["linkage.xi"][mask] * 1e3, "k:", lw=1, label="ξ (slider)")
+        ax_y.plot(deg, column(result, "punch", "y")[mask] * 1e3, label=label)
+        ax_f.plot(deg, column(result, "punch", "F2")[mask], label=label)
+    ax_y.plot(deg, column(result, "linkage", "xi")[mask] * 1e3, "k:", lw=1, label="ξ (slider)")
     ax_y.axhline(0.0, color="0.6", lw=0.8)
     ax_y.set_ylabel("punch height y [mm]")
     ax_f.set_ylabel("fabric force F2 [N]")

@@ -17,7 +17,8 @@ from components.feed import FeedLinkage, FeedParams
 from components.kinematics import AssemblyError
 from components.parameters import with_values
 
-from .sampling import sampled
+from ..sampling import sampled
+from . import column, last_revolution, parameters
 
 L5_L4_RATIOS = (3.5, 4.5, 5.5, 6.0, 6.5, 7.0)
 ROD_RATIOS = tuple(np.round(np.arange(0.7, 1.7001, 0.05), 2))
@@ -28,9 +29,9 @@ def _swing_deg(angles: np.ndarray) -> float:
     return float(np.degrees(np.ptp(np.unwrap(angles))))
 
 
-def summary_of_run(result, shaft="shaft", feed="feed") -> dict:
-    last = result.last_revolution(shaft)
-    col = lambda name: result[f"{feed}.{name}"][last]
+def summary_of_run(result) -> dict:
+    last = last_revolution(result)
+    col = lambda name: column(result, "feed", name)[last]
     return {
         "phi3_swing_deg": _swing_deg(col("phi3")),
         "phi5_swing_deg": _swing_deg(col("phi5")),
@@ -62,19 +63,20 @@ def plot(curves, path, title: str) -> None:
     ax_zoom = fig.add_subplot(2, 2, 2)
     ax_ang = fig.add_subplot(2, 2, 4)
     for label, result in curves:
-        model = FeedLinkage(with_values(FeedParams(), **result.scenario.instances["feed"].parameters))
+        model = FeedLinkage(with_values(FeedParams(), **parameters(result, "feed")))
         for k, phi1 in enumerate(np.radians([0, 90, 180, 270])):
             _draw(ax_mech, model, phi1, f"C{k}")
-        last = result.last_revolution()
-        mx, my = result["feed.M_x"][last] * 1e3, result["feed.M_y"][last] * 1e3
+        last = last_revolution(result)
+        mx, my = column(result, "feed", "M_x")[last] * 1e3, column(result, "feed", "M_y")[last] * 1e3
         ax_mech.plot(mx, my, "k-", lw=2, label="path of M")
         ax_zoom.plot(mx, my, "k-", lw=1.5)
         for k, phi1 in enumerate(np.radians([0, 90, 180, 270])):
             m = model.motion(phi1).joints["M"]
             ax_zoom.plot(m.x * 1e3, m.y * 1e3, "o", color=f"C{k}")
-        deg = np.degrees(result["shaft.phi"][last] - result["shaft.phi"][last][0])
+        phi = column(result, "shaft", "phi")[last]
+        deg = np.degrees(phi - phi[0])
         for name in ("phi3", "phi7", "phi5"):
-            values = np.degrees(np.unwrap(result[f"feed.{name}"][last]))
+            values = np.degrees(np.unwrap(column(result, "feed", name)[last]))
             ax_ang.plot(deg, values - values.mean(), label=f"{name} − {values.mean():.1f}°")
     ax_mech.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title="mechanism and M's path")
     ax_zoom.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title="feed-dog path of M")

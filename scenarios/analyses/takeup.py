@@ -15,18 +15,19 @@ from components.kinematics import AssemblyError
 from components.parameters import with_values
 from components.takeup import TakeupLinkage, TakeupParams
 
-from .sampling import sampled
+from ..sampling import sampled
+from . import column, last_revolution, parameters
 
 LINKS = ("L_AB", "L_BC", "L_CD", "L_BE")
 
 
-def central_difference(result, shaft="shaft", eye="takeup"):
+def central_difference(result):
     """The paper's velocity of E from the recorded samples: dE/dθ by central differences, × ω.
     NaN at the two ends, where a neighbour is missing."""
-    phi, omega = result[f"{shaft}.phi"], result[f"{shaft}.omega"]
+    phi, omega = column(result, "shaft", "phi"), column(result, "shaft", "omega")
     out = []
     for axis in ("z", "x"):
-        e = result[f"{eye}.E_{axis}"]
+        e = column(result, "takeup", f"E_{axis}")
         v = np.full_like(e, np.nan)
         v[1:-1] = (e[2:] - e[:-2]) / (phi[2:] - phi[:-2]) * omega[1:-1]
         out.append(v)
@@ -71,15 +72,14 @@ def _convex_hull(pts: np.ndarray) -> list[int]:
     return lower[:-1] + upper[:-1]
 
 
-def summary_of_run(result, shaft="shaft", eye="takeup") -> dict:
-    last = result.last_revolution(shaft)
-    ez, ex = result[f"{eye}.E_z"][last], result[f"{eye}.E_x"][last]
-    vz, vx = result[f"{eye}.E_vz"][last], result[f"{eye}.E_vx"][last]
-    az, ax = result[f"{eye}.E_az"][last], result[f"{eye}.E_ax"][last]
-    cd_z, cd_x = (v[last] for v in central_difference(result, shaft, eye))
+def summary_of_run(result) -> dict:
+    last = last_revolution(result)
+    eye = lambda name: column(result, "takeup", name)[last]
+    ez, ex, vz, vx, az, ax = (eye(n) for n in ("E_z", "E_x", "E_vz", "E_vx", "E_az", "E_ax"))
+    cd_z, cd_x = (v[last] for v in central_difference(result))
     speed = np.hypot(vz, vx)
     cd_error = np.hypot(cd_z - vz, cd_x - vx)
-    d_theta = np.diff(result[f"{shaft}.phi"]).mean()
+    d_theta = np.diff(column(result, "shaft", "phi")).mean()
     return {
         "path_extent_z_mm": float(np.ptp(ez) * 1e3),
         "path_extent_x_mm": float(np.ptp(ex) * 1e3),
@@ -93,8 +93,8 @@ def summary_of_run(result, shaft="shaft", eye="takeup") -> dict:
     }
 
 
-def _model_of(result, eye="takeup") -> TakeupLinkage:
-    return TakeupLinkage(with_values(TakeupParams(), **result.scenario.instances[eye].parameters))
+def _model_of(result) -> TakeupLinkage:
+    return TakeupLinkage(with_values(TakeupParams(), **parameters(result, "takeup")))
 
 
 def plot(curves, path, title: str) -> None:
@@ -109,21 +109,21 @@ def plot(curves, path, title: str) -> None:
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     (ax_path, ax_disp), (ax_speed, ax_acc) = axes
     for label, result in curves:
-        last = result.last_revolution()
-        deg = np.degrees(result["shaft.phi"][last] - result["shaft.phi"][last][0])
-        ez, ex = result["takeup.E_z"][last] * 1e3, result["takeup.E_x"][last] * 1e3
+        last = last_revolution(result)
+        eye = lambda name: column(result, "takeup", name)[last]
+        phi = column(result, "shaft", "phi")[last]
+        deg = np.degrees(phi - phi[0])
+        ez, ex = eye("E_z") * 1e3, eye("E_x") * 1e3
         ax_path.plot(ez, ex, lw=2, label=f"E ({label})")
         ax_disp.plot(deg, np.hypot(ez - ez[0], ex - ex[0]), label=label)
-        speed = np.hypot(result["takeup.E_vz"][last], result["takeup.E_vx"][last])
+        speed = np.hypot(eye("E_vz"), eye("E_vx"))
         cd_z, cd_x = (v[last] for v in central_difference(result))
         ax_speed.plot(deg, speed, label=f"analytic ({label})")
         ax_speed.plot(deg, np.hypot(cd_z, cd_x), "--", label="central difference, Δθ = 0.5°")
         err = ax_speed.twinx()
-        err.plot(deg, np.hypot(cd_z - result["takeup.E_vz"][last],
-                               cd_x - result["takeup.E_vx"][last]), color="C3", lw=0.8)
+        err.plot(deg, np.hypot(cd_z - eye("E_vz"), cd_x - eye("E_vx")), color="C3", lw=0.8)
         err.set_ylabel("|difference| [m/s]", color="C3")
-        ax_acc.plot(deg, np.hypot(result["takeup.E_az"][last], result["takeup.E_ax"][last]),
-                    label=label)
+        ax_acc.plot(deg, np.hypot(eye("E_az"), eye("E_ax")), label=label)
         model = _model_of(result)
         for theta, color in ((0.0, "C2"), (math.pi, "C4")):
             m = model.motion(theta)

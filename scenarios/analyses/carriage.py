@@ -14,11 +14,12 @@ import textwrap
 
 import numpy as np
 
-from components.carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
+from components.carriage import CarriageDrive, CarriageModal, CarriageParams
 from components.oscillator import DampedOscillator
 from components.parameters import with_values
 
-from .sampling import sampled
+from ..sampling import sampled
+from . import column, last_revolution, parameters
 
 RATES = np.arange(600.0, 2000.0 + 1e-9, 20.0)          # stitches/min
 MACHINE_RATE = 1600.0
@@ -30,20 +31,15 @@ DESIGNS = {
 }
 
 
-def _models(result, carriage="carriage", drive="drive"):
-    inst = result.scenario.instances
-    return (CarriageModal(with_values(CarriageParams(), **inst[carriage].parameters)),
-            CarriageDrive(with_values(CarriageDriveParams(), **inst[drive].parameters)))
-
-
-def summary_of_run(result, shaft="shaft", carriage="carriage") -> dict:
-    model, _ = _models(result)
-    last = result.last_revolution(shaft)
-    omega = float(result[f"{shaft}.omega"][-1])
+def summary_of_run(result) -> dict:
+    model = CarriageModal(with_values(CarriageParams(), **parameters(result, "carriage")))
+    last = last_revolution(result)
+    omega = float(column(result, "shaft", "omega")[-1])
+    u2 = column(result, "carriage", "U2")
     return {"omega1": float(model.omega[0]), "omega2": float(model.omega[1]),
             "stitch_rate_per_min": omega * 60 / (2 * math.pi),
-            "peak_abs_U2_last_stitch_um": float(np.abs(result[f"{carriage}.U2"][last]).max() * 1e6),
-            "peak_abs_U2_um": float(np.abs(result[f"{carriage}.U2"]).max() * 1e6)}
+            "peak_abs_U2_last_stitch_um": float(np.abs(u2[last]).max() * 1e6),
+            "peak_abs_U2_um": float(np.abs(u2).max() * 1e6)}
 
 
 def plot(curves, path, title: str) -> None:
@@ -55,10 +51,10 @@ def plot(curves, path, title: str) -> None:
     for label, result in curves:
         t = result.time
         last = t >= t[-1] - 5 * 60 / summary_of_run(result)["stitch_rate_per_min"]
-        ax_x.plot(t[last], result["drive.x"][last] * 1e3)
-        ax_a.plot(t[last], result["drive.a"][last])
-        ax_u.plot(t[last], result["carriage.U2"][last] * 1e6, label="U2 (tip, at B)")
-        ax_u.plot(t[last], result["carriage.U1"][last] * 1e6, label="U1 (at A)")
+        ax_x.plot(t[last], column(result, "drive", "x")[last] * 1e3)
+        ax_a.plot(t[last], column(result, "drive", "a")[last])
+        ax_u.plot(t[last], column(result, "carriage", "U2")[last] * 1e6, label="U2 (tip, at B)")
+        ax_u.plot(t[last], column(result, "carriage", "U1")[last] * 1e6, label="U1 (at A)")
     ax_x.set_ylabel("table position x [mm]")
     ax_a.set_ylabel("table acceleration [m/s²]")
     ax_u.set_ylabel("deflection [µm]")
