@@ -1,4 +1,4 @@
-"""Error of punch_drive against the monolithic reference, and wall time, per communication step.
+"""Error of punch_drive against the monolithic solution, and wall time, per communication step.
 
     .venv/bin/python bench/punch_step_table.py [--master jacobi|gauss-seidel]
 

@@ -71,8 +71,8 @@ def cmd_compare(args) -> None:
     scenario = _load_with_sets(args.scenario, args.set)
     rows = compare(scenario)
     print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
-          f"co-simulation vs monolithic reference")
-    _print_side_by_side(rows, "co-simulation", "reference")
+          f"co-simulation vs monolithic solution")
+    _print_side_by_side(rows, "co-simulation", "monolithic")
 
 
 def cmd_sweep(args) -> None:
@@ -106,7 +106,7 @@ def cmd_export_ssp(args) -> None:
 def cmd_references(args) -> None:
     from components.catalogue import FMUS
 
-    from . import references
+    from . import regression as references
     from .runner import fmus_for_names
 
     paths = fmus_for_names(list(FMUS))
@@ -176,7 +176,7 @@ def main(argv=None) -> int:
     p.set_defaults(func=cmd_list)
     for name, func, text in (("run", cmd_run, "run a scenario"),
                              ("compare", cmd_compare,
-                              "co-simulation against the monolithic reference")):
+                              "co-simulation against the monolithic solution")):
         p = sub.add_parser(name, help=text)
         p.add_argument("scenario", help="catalogue name or path to a .toml file")
         p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",

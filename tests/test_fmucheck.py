@@ -18,7 +18,7 @@ import pytest
 from components.catalogue import FMUS
 from components.punch_linkage import PunchLinkage
 from scenarios.hosts import host_environment
-from scenarios.references import REFERENCE_DIR, read_options
+from scenarios.regression import REFERENCE_DIR, read_options
 
 FMUCHECK = os.environ.get("SEWFMU_FMUCHECK", "")
 pytestmark = pytest.mark.skipif(

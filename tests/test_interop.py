@@ -12,7 +12,7 @@ import pytest
 
 from components.build import PACKAGE_DIR, build_fmu
 from components.catalogue import FMUS
-from scenarios import references
+from scenarios import regression as references
 from scenarios.cli import main
 from scenarios.format import load
 from scenarios.hosts import check_host_environment, host_environment
@@ -109,3 +109,26 @@ def test_fmutool_check_passes(fmu_paths, name):
     assert proc.returncode == 0, out
     assert "compliant with FMI-2.0" in out and "No semantic error" in out, out
     assert "ERROR" not in out
+
+
+def test_references_work_from_a_plain_install_in_any_folder(tmp_path):
+    """`pip install .` (not editable): the regression references ship with the package, and
+    `sewfmu references` runs from a folder that is not the repository."""
+    repo = Path(__file__).resolve().parent.parent
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--target", str(target), str(repo)],
+                   check=True, capture_output=True, timeout=600)
+    assert (target / "scenarios" / "regression_references" / "PunchContact"
+            / "PunchContact_ref.csv").exists()
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(target)}
+    env.pop("SEWFMU_FMU_DIR", None)
+    probe = subprocess.run([sys.executable, "-c", "import scenarios; print(scenarios.__file__)"],
+                           cwd=work, env=env, capture_output=True, text=True, timeout=60)
+    assert probe.stdout.strip().startswith(str(target)), probe.stdout
+    proc = subprocess.run([sys.executable, "-m", "scenarios.cli", "references"], cwd=work,
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "all 7 FMUs match their references" in proc.stdout

@@ -1,4 +1,4 @@
-"""The punch_drive scenario: co-simulation against the monolithic reference (scipy DOP853 with
+"""The punch_drive scenario: co-simulation against the monolithic solution (scipy DOP853 with
 event location), convergence with the communication step, and the command line."""
 import json
 import math
@@ -14,20 +14,20 @@ from scenarios.runner import monolithic_summary, summarize
 
 
 @pytest.fixture(scope="module")
-def reference():
+def monolithic():
     return monolithic_summary(load("punch_drive"))[0]
 
 
 @pytest.mark.parametrize("master", ["jacobi", "gauss-seidel"])
-def test_summary_figures_match_the_monolithic_reference(fmu_paths, reference, master):
+def test_summary_figures_match_the_monolithic_solution(fmu_paths, monolithic, master):
     sc = load("punch_drive")
     sc.master = master
     figures = summarize(run(sc, fmu_paths))
-    assert figures["n_contacts"] == reference["n_contacts"] == 1
+    assert figures["n_contacts"] == monolithic["n_contacts"] == 1
     for key in ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg"):
-        assert abs(figures[key] - reference[key]) < 1.0, key
+        assert abs(figures[key] - monolithic[key]) < 1.0, key
     for key in ("F2_peak", "F2_weld_mean"):
-        assert abs(figures[key] - reference[key]) < 0.3, key
+        assert abs(figures[key] - monolithic[key]) < 0.3, key
     # the paper: at ω = 100 s⁻¹ the pressing force during welding is practically constant, ≈ 22 N
     assert 20.0 < figures["F2_weld_mean"] < 25.0
 
@@ -37,11 +37,11 @@ def _trajectory_error(fmu_paths, master, h, revolutions=3):
     sc.master, sc.step, sc.revolutions = master, h, revolutions
     result = run(sc, fmu_paths)
     t_end = result.time[-1]
-    ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
+    mono = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
                                 sample_switches=False)
     n = len(result.time) - 1              # the last step may be shorter: compare the grid
-    assert np.allclose(ref.time[:n], result.time[:n], rtol=0, atol=1e-12)
-    return np.max(np.abs(result["punch.y"][:n] - ref.y[:n]))
+    assert np.allclose(mono.time[:n], result.time[:n], rtol=0, atol=1e-12)
+    return np.max(np.abs(result["punch.y"][:n] - mono.y[:n]))
 
 
 @pytest.mark.parametrize("master", ["jacobi", "gauss-seidel"])
@@ -55,10 +55,10 @@ def test_error_shrinks_with_the_step_at_the_observed_order(fmu_paths, master):
     assert errors[-1] < 2e-8                  # 0.02 µm of punch height at 2.5e-4 s
 
 
-def test_punch_held_on_a_preloaded_stop_matches_the_reference(fmu_paths):
+def test_punch_held_on_a_preloaded_stop_matches_the_monolithic_solution(fmu_paths):
     """Compression-only spring 11 with a 30 N preload: the punch rides on the stop for most of the
-    revolution (the reference says how long), lands, leaves the stop and is picked up again. The
-    co-simulation's punch height and spring-11 force follow the monolithic reference."""
+    revolution (the monolithic solution says how long), lands, leaves the stop and is picked up again. The
+    co-simulation's punch height and spring-11 force follow the monolithic solution."""
     h = 2.5e-4
     punch = {"compression_only": 1, "F30": 30.0}
     sc = load("punch_drive")
@@ -66,12 +66,12 @@ def test_punch_held_on_a_preloaded_stop_matches_the_reference(fmu_paths):
     for name, value in punch.items():
         sc.set_value(f"punch.{name}", value)
     result = run(sc, fmu_paths)
-    ref = punch_monolithic.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=h,
+    mono = punch_monolithic.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=h,
                                 sample_switches=False)
     n = len(result.time) - 1
-    assert 0.5 < np.mean(ref.held[:n]) < 0.9
-    assert np.max(np.abs(result["punch.y"][:n] - ref.y[:n])) < 5e-8
-    assert np.max(np.abs(result["punch.F3"][:n] - ref.F3[:n])) < 0.05
+    assert 0.5 < np.mean(mono.held[:n]) < 0.9
+    assert np.max(np.abs(result["punch.y"][:n] - mono.y[:n])) < 5e-8
+    assert np.max(np.abs(result["punch.F3"][:n] - mono.F3[:n])) < 0.05
 
 
 def test_cli_run_writes_results_summary_and_plot(tmp_path, fmu_dir, monkeypatch):

@@ -1,8 +1,13 @@
-"""Regression references for every FMU, in the layout of the FMI Cross-Check repository:
+"""Regression references for every FMU, in the layout of the FMI Cross-Check repository, shipped
+with the package (scenarios/regression_references/):
 
-    tests/references/<Model>/<Model>_ref.csv   the outputs (time and one column per output)
-    tests/references/<Model>/<Model>_in.csv    the inputs, where the FMU has any
-    tests/references/<Model>/<Model>_ref.opt   StartTime, StopTime, StepSize, RelTol
+    <Model>/<Model>_ref.csv   the outputs (time and one column per output)
+    <Model>/<Model>_in.csv    the inputs, where the FMU has any
+    <Model>/<Model>_ref.opt   StartTime, StopTime, StepSize, RelTol
+
+Each is made with the FMU's default parameters, so that anyone can reproduce it (fmuCheck does,
+with the reference's input, step and stop time). Not to be confused with the monolithic solution
+of the punch drive (scenarios/punch_monolithic.py), against which the physics is checked.
 
 Each FMU runs alone in fmpy's simulate_fmu, its inputs from _in.csv. The inputs are made from the
 models of the upstream mechanisms (the shaft at constant speed; the punch driven by the six-bar's
@@ -21,7 +26,7 @@ import numpy as np
 
 from .sampling import sampled
 
-REFERENCE_DIR = Path(__file__).resolve().parent.parent / "tests" / "references"
+REFERENCE_DIR = Path(__file__).resolve().parent / "regression_references"
 
 
 @dataclass(frozen=True)
