@@ -32,6 +32,7 @@ Every mistake is a ScenarioError that names the file and the key.
 from __future__ import annotations
 
 import copy
+import hashlib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -84,6 +85,7 @@ class Scenario:
     sweep: dict[str, Any] | None = None
     record_every: int = 1             # record every n-th communication point (long runs)
     roles: dict[str, str] = field(default_factory=dict)   # the analysis's role -> instance
+    digest: str = ""                  # sha256 of the scenario file's text, as read
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
@@ -182,12 +184,15 @@ def resolve(name_or_path: str) -> Path:
 def load(name_or_path: str) -> Scenario:
     path = resolve(name_or_path)
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_text(encoding="utf-8")
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{path}: not valid TOML: {err}") from None
     except OSError as err:
         raise ScenarioError(f"{path}: cannot read: {err}") from None
-    return from_dict(data, path.stem, str(path))
+    scenario = from_dict(data, path.stem, str(path))
+    scenario.digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return scenario
 
 
 def _table(data: dict, key: str, where: str, required: bool = True) -> dict:

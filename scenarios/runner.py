@@ -141,16 +141,37 @@ def variants(scenario: Scenario) -> list[tuple[str, Scenario]]:
     return out
 
 
+def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
+    """What produced a run: the scenario (file and its hash), every parameter value each instance
+    ran with (defaults included; `set` marks the scenario's own values), the master and step,
+    sewfmu's version and each FMU's version with the hash of the code it carries."""
+    from components.build import VERSION, fmu_version
+    from components.catalogue import parameters_of
+
+    instances = {}
+    for name, inst in scenario.instances.items():
+        instances[name] = {"fmu": inst.fmu, "parameters": {
+            info.name: {"value": inst.parameters.get(info.name, info.default),
+                        "unit": info.unit, "set": info.name in inst.parameters}
+            for info in parameters_of(inst.fmu)}}
+    return {"scenario": {"name": scenario.name, "source": scenario.source,
+                         "sha256": scenario.digest or None},
+            "instances": instances, "master": scenario.master, "step": scenario.step,
+            "end_time": scenario.end_time(), "sewfmu": VERSION,
+            "fmus": {fmu: fmu_version(path) for fmu, path in sorted(fmu_paths.items())}}
+
+
 def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
                  fmu_dir: Path | None = None) -> dict:
     """Run (each variant of) a scenario into out_dir; return the summary written there."""
     out_dir = Path(out_dir)
     runs = []
     for label, sc in variants(scenario):
-        result = simulate(sc, fmu_dir)
+        paths = fmus_for(sc, fmu_dir)
+        result = run(sc, paths)
         where = out_dir / label if label else out_dir
         write_csv(result, where / "results.csv")
-        summary = summarize(result)
+        summary = {**summarize(result), "provenance": provenance(sc, paths)}
         write_json(summary, where / "summary.json")
         runs.append((label, result, summary))
     if scenario.compare:

@@ -1,16 +1,20 @@
 """The punch_drive scenario: co-simulation against the monolithic solution (scipy DOP853 with
 event location), convergence with the communication step, and the command line."""
+import hashlib
 import json
 import math
 
 import numpy as np
 import pytest
 
+from components.build import current_version
+from components.parameters import parameter_info
+from components.punch_contact import PunchContactParams
 from scenarios import punch_monolithic
 from scenarios.cli import main
-from scenarios.format import load
+from scenarios.format import load, resolve
 from scenarios.master import run
-from scenarios.runner import monolithic_summary, summarize
+from scenarios.runner import monolithic_summary, run_scenario, summarize
 
 
 @pytest.fixture(scope="module")
@@ -106,3 +110,27 @@ def test_cli_errors_are_one_clear_line(args, message, capsys, tmp_path, fmu_dir,
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and message in err, err
     assert not (tmp_path / "results.csv").exists()
+
+
+def test_summary_records_what_produced_it(fmu_dir, tmp_path, monkeypatch):
+    """Two runs that differ in c3 have summaries that tell them apart: every parameter value used
+    (defaults included, the scenario's own marked), the scenario file's hash, master, step,
+    sewfmu's version and each FMU's code."""
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
+    summaries = []
+    for c3 in (1e5, 2e5):
+        sc = load("punch_drive")
+        sc.set_value("punch.c3", c3)
+        run_scenario(sc, tmp_path / str(c3))
+        summaries.append(json.loads((tmp_path / str(c3) / "summary.json").read_text()))
+    made = [s["provenance"] for s in summaries]
+    punch = [m["instances"]["punch"]["parameters"] for m in made]
+    assert punch[0]["c3"] == {"value": 1e5, "unit": "N/m", "set": True}
+    assert punch[1]["c3"]["value"] == 2e5
+    assert punch[0]["m"] == {"value": PunchContactParams().m, "unit": "kg", "set": False}
+    assert set(punch[0]) == {info.name for info in parameter_info(PunchContactParams)}
+    assert made[0]["scenario"]["sha256"] == hashlib.sha256(
+        resolve("punch_drive").read_bytes()).hexdigest()
+    assert made[0]["master"] == "jacobi" and made[0]["step"] == 2.5e-4
+    assert set(made[0]["fmus"]) == {"MainShaft", "PunchLinkage", "PunchContact"}
+    assert all(v == current_version() for v in made[0]["fmus"].values())
