@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from .oscillator import DampedOscillator
 from .parameters import FRACTION, NONNEGATIVE, ParameterError, parameter, validate
@@ -131,16 +132,6 @@ class CarriageModal:
         load = (rho * integral[0], rho * integral[1] + p.m_k)
         return M, load
 
-    def energy_stiffness(self) -> Matrix:
-        """EJ·∫ N''·N''ᵀ dz: the stiffness from the strain energy of the shapes (equals K)."""
-        k = [[0.0, 0.0], [0.0, 0.0]]
-        for z, w in self._quadrature():
-            _, n2 = self.shapes(z)
-            for i in range(2):
-                for j in range(2):
-                    k[i][j] += self.p.EJ * w * n2[i] * n2[j]
-        return (tuple(k[0]), tuple(k[1]))
-
     # --- base-excited motion -------------------------------------------------------------------
     def static_deflection(self, a_base: float) -> Vector:
         """U under a constant base acceleration: K·U = −p·a, so U = −F·p·a."""
@@ -193,6 +184,14 @@ def _generalized_eigen(K: Matrix, M: Matrix) -> tuple[Vector, Matrix]:
     return lams, modes
 
 
+class TableMotion(NamedTuple):
+    """The table's position, velocity, acceleration and jerk along the motion axis."""
+    x: float
+    v: float
+    a: float
+    jerk: float
+
+
 # --- the start-stop drive -----------------------------------------------------------------------
 @dataclass(frozen=True)
 class CarriageDriveParams:
@@ -233,11 +232,11 @@ class CarriageDrive:
     def _position(self, phi: float) -> float:
         return self._law(phi)[0]
 
-    def motion(self, phi: float, omega: float, epsilon: float) -> tuple[float, float, float, float]:
+    def motion(self, phi: float, omega: float, epsilon: float) -> "TableMotion":
         """x, v, a, jerk of the table for shaft angle, speed and acceleration (the shaft's
         acceleration is taken as constant over the instant: its derivative does not enter)."""
         x, d1, d2, d3 = self._law(phi)
         v = d1 * omega
         acc = d2 * omega ** 2 + d1 * epsilon
         jerk = d3 * omega ** 3 + 3 * d2 * omega * epsilon
-        return x - self.x0, v, acc, jerk
+        return TableMotion(x - self.x0, v, acc, jerk)

@@ -3,12 +3,12 @@ import importlib
 
 FMUS: dict[str, tuple[str, str]] = {
     "MainShaft": ("shaft_fmu", "MainShaftSlave"),
-    "PunchLinkage": ("punch_fmus", "PunchLinkageSlave"),
-    "PunchContact": ("punch_fmus", "PunchContactSlave"),
+    "PunchLinkage": ("punch_fmu", "PunchLinkageSlave"),
+    "PunchContact": ("punch_fmu", "PunchContactSlave"),
     "TakeupLinkage": ("takeup_fmu", "TakeupLinkageSlave"),
     "FeedLinkage": ("feed_fmu", "FeedLinkageSlave"),
-    "CarriageDrive": ("carriage_fmus", "CarriageDriveSlave"),
-    "CarriageModal": ("carriage_fmus", "CarriageModalSlave"),
+    "CarriageDrive": ("carriage_fmu", "CarriageDriveSlave"),
+    "CarriageModal": ("carriage_fmu", "CarriageModalSlave"),
 }
 
 

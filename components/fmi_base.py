@@ -56,6 +56,8 @@ class Port:
     start: float = 0.0             # inputs only
     feedthrough: bool = False      # outputs only: depends on the inputs at the same instant
     kind: str = "Real"             # "Real" or "Boolean"
+    source: str = ""               # linkage outputs: where in the model's motion the value is
+                                   # ("E.x", "joints.M.vy"); default: the port's name
 
 
 def shaft_inputs(omega: float) -> tuple[Port, Port, Port]:
@@ -85,6 +87,7 @@ class SewSlave(Fmi2Slave):
     author = "sewfmu"
     license = "MIT"
     params_class: type | None = None
+    model_class: type | None = None   # built from an instance of params_class
     inputs: Sequence[Port] = ()
     outputs: Sequence[Port] = ()
     calculated: Sequence[Port] = ()
@@ -396,7 +399,7 @@ class SewSlave(Fmi2Slave):
 
     # --- what each FMU provides ----------------------------------------------------------------
     def build_model(self, params):
-        raise NotImplementedError
+        return type(self).model_class(params)
 
     def initialize(self, model) -> None:
         """Set the internal state from the parameters and the inputs set during initialization."""
@@ -466,6 +469,33 @@ class SewSlave(Fmi2Slave):
             # at initialization every unknown may depend on the parameters and inputs: no list
             SubElement(initial, "Unknown", {"index": str(index_of[port.name])})
         return root
+
+
+class LinkageSlave(SewSlave):
+    """An FMU of a linkage driven by the main shaft: its model's `motion(φ, ω, ε)` at the
+    extrapolated shaft inputs gives every output (all direct feedthrough), each read from the
+    motion where its port's `source` says. A linkage FMU only declares."""
+
+    taylor_inputs = SHAFT_TAYLOR
+    speed = 100.0                  # rad/s: the start value of the input omega
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.inputs = shaft_inputs(cls.speed)
+        # each output's path into the motion, split once
+        cls._paths = tuple((port.name, tuple((port.source or port.name).split(".")))
+                           for port in cls.outputs)
+
+    def current_outputs(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        motion = self.model().motion(u["phi"], u["omega"], u["epsilon"])
+        return {name: float(_pick(motion, path)) for name, path in type(self)._paths}
+
+
+def _pick(value, path: tuple[str, ...]):
+    for key in path:
+        value = value[key] if isinstance(value, dict) else getattr(value, key)
+    return value
 
 
 _KIND_NAME = {Real: "Real", Integer: "Integer", Boolean: "Boolean"}

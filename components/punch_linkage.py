@@ -138,7 +138,7 @@ class PunchLinkage:
         return psi, d1, d2
 
     # --- the excitation of the punch -------------------------------------------------------------
-    def excitation(self, phi: float, omega: float, epsilon: float) -> Excitation:
+    def motion(self, phi: float, omega: float, epsilon: float) -> Excitation:
         """psi, xi, dxi/dt, d2xi/dt2 for shaft angle phi (rad), speed omega, acceleration epsilon."""
         if self.p.mode == SIX_BAR:
             d = self.slider(self.alpha0 - phi, -omega, -epsilon)

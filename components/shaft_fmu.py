@@ -12,15 +12,13 @@ class MainShaftSlave(SewSlave):
 
     model_name = "MainShaft"
     params_class = ShaftParams
+    model_class = MainShaft
     experiment = (2 * math.pi / 100.0, 2.5e-4)    # one revolution at the default speed
     outputs = (
         Port("phi", "rad", "shaft angle, cumulative (one stitch = 2π)"),
         Port("omega", "rad/s", "shaft speed"),
         Port("epsilon", "rad/s2", "shaft angular acceleration"),
     )
-
-    def build_model(self, params):
-        return MainShaft(params)
 
     def current_outputs(self):
         phi, omega, epsilon = self.model().state(self._time)

@@ -50,7 +50,7 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
 
     def excitation(t):
         phi, omega, eps = sh.state(t)
-        e = lk.excitation(phi, omega, eps)
+        e = lk.motion(phi, omega, eps)
         return float(e.xi), float(e.xi_dot), float(e.xi_ddot)
 
     def forces(t, y, v, contact, spring_on):
@@ -208,7 +208,7 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
             spring_on[mask] = s_on
             held[mask] = on_stop
     motion = np.array([shaft.state(t) for t in times])
-    e = sampled(linkage.excitation, motion[:, 0], motion[:, 1], motion[:, 2])
+    e = sampled(linkage.motion, motion[:, 0], motion[:, 1], motion[:, 2])
     f2 = np.where(contact, np.maximum(-(p.c2 * y + p.b2 * v), 0.0), 0.0)
     f3 = np.where(spring_on, p.F30 + p.c3 * (e.xi - y) + p.b3 * (e.xi_dot - v), 0.0)
     if p.compression_only:

@@ -44,7 +44,7 @@ def _shaft(omega: float):
 
 def _punch_inputs(t):
     from components.punch_linkage import PunchLinkage
-    e = sampled(PunchLinkage().excitation, 200.0 * t, 200.0, 0.0)
+    e = sampled(PunchLinkage().motion, 200.0 * t, 200.0, 0.0)
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}
 
 

@@ -52,12 +52,12 @@ def test_outputs_after_initialization_follow_the_inputs_set_during_it(fmu_paths)
     link = Host(fmu_paths["PunchLinkage"])
     link.set(phi=1.0, omega=120.0, epsilon=50.0)
     link.fmu.exitInitializationMode()
-    e = PunchLinkage().excitation(1.0, 120.0, 50.0)
+    e = PunchLinkage().motion(1.0, 120.0, 50.0)
     assert link.get("xi", "xi_dot", "xi_ddot") == pytest.approx([e.xi, e.xi_dot, e.xi_ddot],
                                                                 rel=1e-12)
     # direct feedthrough: new inputs, same instant, new outputs (no step)
     link.set(phi=2.0)
-    assert link.get("xi") == pytest.approx(PunchLinkage().excitation(2.0, 120.0, 50.0).xi)
+    assert link.get("xi") == pytest.approx(PunchLinkage().motion(2.0, 120.0, 50.0).xi)
     punch = Host(fmu_paths["PunchContact"])
     punch.set(xi=3.7e-3, xi_dot=0.0, xi_ddot=0.0)
     punch.fmu.exitInitializationMode()
@@ -72,7 +72,7 @@ def test_outputs_after_a_step_are_values_at_its_end(fmu_paths):
     link.fmu.exitInitializationMode()
     h = 1e-3
     link.fmu.doStep(0.0, h)
-    e = PunchLinkage().excitation(0.5 + 100.0 * h + 0.5 * 400.0 * h * h, 100.0 + 400.0 * h, 400.0)
+    e = PunchLinkage().motion(0.5 + 100.0 * h + 0.5 * 400.0 * h * h, 100.0 + 400.0 * h, 400.0)
     assert link.get("xi", "xi_dot") == pytest.approx([e.xi, e.xi_dot], rel=1e-12)
     shaft = Host(fmu_paths["MainShaft"])
     shaft.set(omega0=80.0)
@@ -353,7 +353,7 @@ def test_input_start_values_are_the_default_setup(fmu_paths):
                            ("CarriageDrive", 1600 * 2 * math.pi / 60)):
         assert _starts(fmu_paths[linkage]) == pytest.approx(
             {"phi": 0.0, "omega": speed, "epsilon": 0.0}), linkage
-    e = PunchLinkage().excitation(*shaft)
+    e = PunchLinkage().motion(*shaft)
     assert _starts(fmu_paths["PunchContact"]) == pytest.approx(
         {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}, rel=1e-12, abs=1e-12)
     omega = 1600 * 2 * math.pi / 60

@@ -115,9 +115,12 @@ def test_references_work_from_a_plain_install_in_any_folder(tmp_path):
     """`pip install .` (not editable): the regression references ship with the package, and
     `sewfmu references` runs from a folder that is not the repository."""
     repo = Path(__file__).resolve().parent.parent
+    source = tmp_path / "source"               # a copy: setuptools builds in the source tree
+    shutil.copytree(repo, source, ignore=shutil.ignore_patterns(
+        ".venv", ".git", "fmus", "results", "build", "*.egg-info", "__pycache__"))
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
-                    "--target", str(target), str(repo)],
+                    "--target", str(target), str(source)],
                    check=True, capture_output=True, timeout=600)
     assert (target / "scenarios" / "regression_references" / "PunchContact"
             / "PunchContact_ref.csv").exists()

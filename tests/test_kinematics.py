@@ -90,7 +90,7 @@ def test_six_bar_keeps_every_link_length_over_a_revolution():
 def test_setup_position_is_the_slider_top():
     link = PunchLinkage()
     phi = np.linspace(0, 2 * math.pi, 3601)
-    e = sampled(link.excitation, phi, 1.0, 0.0)
+    e = sampled(link.motion, phi, 1.0, 0.0)
     assert e.xi[0] == pytest.approx(link.p.xi0, abs=1e-15)
     assert abs(e.xi_dot[0]) < 1e-12          # dξ/dφ = 0 at the top
     assert np.all(e.psi >= -1e-15)
@@ -107,8 +107,8 @@ def test_excitation_derivatives_match_finite_differences_with_acceleration(mode)
     w0, eps = 150.0, 900.0
     t = np.linspace(0.001, 0.05, 97)
     dt = 1e-6
-    xi = lambda tt: sampled(link.excitation, w0 * tt + 0.5 * eps * tt ** 2, w0 + eps * tt, eps).xi
-    e = sampled(link.excitation, w0 * t + 0.5 * eps * t ** 2, w0 + eps * t, eps)
+    xi = lambda tt: sampled(link.motion, w0 * tt + 0.5 * eps * tt ** 2, w0 + eps * tt, eps).xi
+    e = sampled(link.motion, w0 * t + 0.5 * eps * t ** 2, w0 + eps * t, eps)
     assert np.allclose(e.xi_dot, (xi(t + dt) - xi(t - dt)) / (2 * dt), rtol=1e-5, atol=1e-7)
     assert np.allclose(e.xi_ddot, (xi(t + dt) - 2 * xi(t) + xi(t - dt)) / dt ** 2,
                        rtol=2e-3, atol=0.05)
@@ -118,7 +118,7 @@ def test_required_displacement_law():
     p = PunchLinkageParams(mode=REQUIRED_DISPLACEMENT)
     link = PunchLinkage(p)
     dwell = p.phi_descent + 0.5 * p.phi_dwell
-    e = sampled(link.excitation, [0.0, dwell, 2 * math.pi - 1e-9, 4 * math.pi + dwell], 1.0, 0.0)
+    e = sampled(link.motion, [0.0, dwell, 2 * math.pi - 1e-9, 4 * math.pi + dwell], 1.0, 0.0)
     assert np.allclose(e.psi, [0.0, p.psi_m, 0.0, p.psi_m], atol=1e-12)
     assert np.allclose(e.xi_dot, 0.0, atol=1e-9)       # cycloidal: at rest at both ends
 

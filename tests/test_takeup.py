@@ -12,7 +12,7 @@ from scenarios.format import load
 from scenarios.master import run
 from scenarios.runner import summarize
 from scenarios.sampling import sampled
-from scenarios.analyses.takeup import central_difference_velocity, path_stroke, tolerance_study
+from scenarios.analyses.takeup import path_stroke, tolerance_study
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 
@@ -34,6 +34,16 @@ def test_closure_at_every_crank_angle_and_a_rigid_coupler_triangle():
     # CE by the law of cosines: the triangle keeps its shape
     ce = math.sqrt(p.L_BC ** 2 + p.L_BE ** 2 - 2 * p.L_BC * p.L_BE * math.cos(p.angle_CBE))
     assert np.allclose(_dist(m.C, m.E), ce, atol=1e-12)
+
+
+def central_difference_velocity(linkage: TakeupLinkage, theta, omega: float,
+                                d_theta: float = math.radians(0.5)) -> tuple:
+    """The paper's velocity of E at crank angles theta: central differences in θ with step
+    d_theta, times ω."""
+    plus = sampled(lambda th: linkage.motion(th + d_theta).E, theta)
+    minus = sampled(lambda th: linkage.motion(th - d_theta).E, theta)
+    scale = omega / (2.0 * d_theta)
+    return (plus.x - minus.x) * scale, (plus.y - minus.y) * scale
 
 
 def _eye_by_printed_formula(link, theta):

@@ -34,16 +34,6 @@ def central_difference(result):
     return out
 
 
-def central_difference_velocity(linkage: TakeupLinkage, theta, omega: float,
-                                d_theta: float = math.radians(0.5)) -> tuple:
-    """The paper's velocity of E at crank angles theta: central differences in θ with step
-    d_theta, times ω."""
-    plus = sampled(lambda th: linkage.motion(th + d_theta).E, theta)
-    minus = sampled(lambda th: linkage.motion(th - d_theta).E, theta)
-    scale = omega / (2.0 * d_theta)
-    return (plus.x - minus.x) * scale, (plus.y - minus.y) * scale
-
-
 def path_stroke(e_z: np.ndarray, e_x: np.ndarray) -> float:
     """The largest distance between two points of E's path: the eye's stroke, a measure of the
     thread amount it pulls per stitch."""

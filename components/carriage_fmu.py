@@ -4,19 +4,19 @@ from __future__ import annotations
 import math
 
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
-from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, shaft_inputs
+from .fmi_base import LinkageSlave, Port, SewSlave
 
 SPEED = 1600 * 2 * math.pi / 60          # the semi-automat's 1600 stitches/min, in rad/s
 
 
-class CarriageDriveSlave(SewSlave):
+class CarriageDriveSlave(LinkageSlave):
     """Start-stop drive of the coordinate device: one cycloidal stitch advance per revolution."""
 
     model_name = "CarriageDrive"
     params_class = CarriageDriveParams
-    inputs = shaft_inputs(SPEED)
+    model_class = CarriageDrive
+    speed = SPEED
     experiment = (3 * 2 * math.pi / SPEED, 1e-4)  # three stitches
-    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("x", "m", "table position along the motion axis", feedthrough=True),
         Port("v", "m/s", "table velocity", feedthrough=True),
@@ -24,20 +24,13 @@ class CarriageDriveSlave(SewSlave):
         Port("jerk", "m/s3", "table jerk", feedthrough=True),
     )
 
-    def build_model(self, params):
-        return CarriageDrive(params)
-
-    def current_outputs(self):
-        u = self.extrapolated_inputs(self._elapsed)
-        x, v, a, jerk = self.model().motion(u["phi"], u["omega"], u["epsilon"])
-        return {"x": float(x), "v": float(v), "a": float(a), "jerk": float(jerk)}
-
 
 class CarriageModalSlave(SewSlave):
     """Carriage on its guide cantilever: 2-DOF Ritz model under the base acceleration of the drive."""
 
     model_name = "CarriageModal"
     params_class = CarriageParams
+    model_class = CarriageModal
     inputs = (
         Port("a_base", "m/s2", "acceleration of the traverse (the cantilever's root)"),
         Port("a_base_dot", "m/s3", "its rate of change (the drive's jerk)",
@@ -63,9 +56,6 @@ class CarriageModalSlave(SewSlave):
         super().__init__(**kwargs)
         self._q = None           # modal coordinates and rates; None until initialized
         self._dq = None
-
-    def build_model(self, params):
-        return CarriageModal(params)
 
     def initialize(self, model):
         # at rest in the static deflection under the initial base acceleration

@@ -3,21 +3,21 @@ from __future__ import annotations
 
 import math
 
-from .fmi_base import SHAFT_TAYLOR, Port, SewSlave, fields_of, shaft_inputs
+from .fmi_base import LinkageSlave, Port, SewSlave, fields_of
 from .punch_contact import PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 
 SETUP_SPEED = 100.0         # rad/s: the punch drive's default shaft speed (the paper's first case)
 
 
-class PunchLinkageSlave(SewSlave):
+class PunchLinkageSlave(LinkageSlave):
     """Six-bar punch drive (or the required displacement function): shaft motion to punch lift."""
 
     model_name = "PunchLinkage"
     params_class = PunchLinkageParams
-    inputs = shaft_inputs(SETUP_SPEED)
+    model_class = PunchLinkage
+    speed = SETUP_SPEED
     experiment = (2 * math.pi / SETUP_SPEED, 2.5e-4)         # one revolution
-    taylor_inputs = SHAFT_TAYLOR
     outputs = (
         Port("xi", "m", "kinematic excitation of the punch: xi0 - psi", feedthrough=True),
         Port("xi_dot", "m/s", "d(xi)/dt", feedthrough=True),
@@ -25,14 +25,6 @@ class PunchLinkageSlave(SewSlave):
         Port("psi", "m", "displacement of the slider below its highest point", feedthrough=True),
     )
 
-    def build_model(self, params):
-        return PunchLinkage(params)
-
-    def current_outputs(self):
-        u = self.extrapolated_inputs(self._elapsed)
-        e = self.model().excitation(u["phi"], u["omega"], u["epsilon"])
-        return {"xi": float(e.xi), "xi_dot": float(e.xi_dot), "xi_ddot": float(e.xi_ddot),
-                "psi": float(e.psi)}
 
 
 class PunchContactSlave(SewSlave):
@@ -40,6 +32,7 @@ class PunchContactSlave(SewSlave):
 
     model_name = "PunchContact"
     params_class = PunchContactParams
+    model_class = PunchContact
     # the excitation the default linkage gives at the setup position (φ = 0, slider at its top)
     # at the default speed: a host that starts with the start values starts the punch at rest
     inputs = (
@@ -67,9 +60,6 @@ class PunchContactSlave(SewSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._state: PunchState | None = None
-
-    def build_model(self, params):
-        return PunchContact(params)
 
     def _state_now(self) -> PunchState:
         # before initialization ends, the punch rests on its excitation (setup position)
