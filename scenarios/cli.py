@@ -61,7 +61,7 @@ def cmd_run(args) -> None:
     figures = summary.get("runs", {"": summary})
     for label, fig in figures.items():
         shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in fig.items()
-                          if k not in ("scenario", "master", "step", "stop_time"))
+                          if k not in ("scenario", "master", "step", "stop_time", "provenance"))
         print(f"  {label + ': ' if label else ''}{shown}")
 
 

@@ -145,20 +145,30 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     """What produced a run: the scenario (file and its hash), every parameter value each instance
     ran with (defaults included; `set` marks the scenario's own values), the master and step,
     sewfmu's version and each FMU's version with the hash of the code it carries."""
-    from components.build import VERSION, fmu_version
-    from components.catalogue import parameters_of
+    from components.build import VERSION
 
+    from .master import extracted_fmu
+
+    described = {fmu: extracted_fmu(Path(path))[1] for fmu, path in fmu_paths.items()}
     instances = {}
     for name, inst in scenario.instances.items():
+        declared = [v for v in described[inst.fmu].modelVariables if v.causality == "parameter"]
         instances[name] = {"fmu": inst.fmu, "parameters": {
-            info.name: {"value": inst.parameters.get(info.name, info.default),
-                        "unit": info.unit, "set": info.name in inst.parameters}
-            for info in parameters_of(inst.fmu)}}
+            v.name: {"value": inst.parameters.get(v.name, _number(v.start)), "unit": v.unit or "1",
+                     "set": v.name in inst.parameters}
+            for v in declared}}
     return {"scenario": {"name": scenario.name, "source": scenario.source,
                          "sha256": scenario.digest or None},
             "instances": instances, "master": scenario.master, "step": scenario.step,
             "end_time": scenario.end_time(), "sewfmu": VERSION,
-            "fmus": {fmu: fmu_version(path) for fmu, path in sorted(fmu_paths.items())}}
+            "fmus": {fmu: md.version for fmu, md in sorted(described.items())}}
+
+
+def _number(text: str) -> float | int:
+    """A start value of the modelDescription as the number it is."""
+    value = float(text)
+    return int(value) if value.is_integer() and "." not in text and "e" not in text.lower() \
+        else value
 
 
 def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
