@@ -130,8 +130,9 @@ class LogCollector:
         return [line for line in self.lines if f"] {name}: " in line]
 
 
-class _Unit:
-    """One FMU instance in the master, with its value references resolved."""
+class FmuInstance:
+    """One instance of an FMU as the master runs it (fmpy's FMU2Slave), its value references
+    resolved; the scenario declares it as a format.Instance."""
 
     def __init__(self, name: str, unzip_dir: str, md, log: LogCollector):
         self.name = name
@@ -144,7 +145,7 @@ class _Unit:
         self.failed = False          # a call returned fmi2Fatal: make no further calls
         self.real_out: list[str] = []       # outputs read every step, in order
         self.bool_out: list[str] = []
-        self.inputs: list[tuple[str, "_Unit", str]] = []   # (input, source unit, source output)
+        self.inputs: list[tuple[str, "FmuInstance", str]] = []   # (input, source unit, source output)
 
     def variable(self, var: str, causality: tuple[str, ...], what: str):
         v = self.variables.get(var)
@@ -273,14 +274,14 @@ class Master:
         self.n_steps = max(1, math.ceil(self.stop / sc.step - 1e-9))
         self.every = max(1, int(sc.record_every))
         self.log = LogCollector()
-        self.units: list[_Unit] = []
+        self.instances: list[FmuInstance] = []
         self.k = 0
         self._phase = "loading"
         with self._reporting():
-            self.units = self._load(self.log)
-            self.columns = self._plan(self.units)
+            self.instances = self._load(self.log)
+            self.columns = self._plan(self.instances)
             self._phase = "initialization"
-            for unit in self.units:
+            for unit in self.instances:
                 self._initialize(unit, self.stop)
         self._rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
         self._data = np.empty((self._rows, len(self.columns)))
@@ -294,7 +295,7 @@ class Master:
         t = self.k * self.scenario.step
         h = min(self.scenario.step, self.stop - t)
         try:                       # (no context manager here: this is the hot path)
-            self.exchange_and_step(self.units, t, h)
+            self.exchange_and_step(self.instances, t, h)
         except FMICallException as err:
             raise self._failure(err, f"from t = {t:g} to {t + h:g} s") from None
         self.k += 1
@@ -304,14 +305,14 @@ class Master:
     def save_state(self) -> tuple:
         """The state of every FMU and of the master: `restore_state` rolls back to it."""
         with self._reporting(self.k * self.scenario.step):
-            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.units])
+            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.instances])
 
     def restore_state(self, state: tuple) -> None:
         self.k, self._row, fmu_states = state
         with self._reporting(self.k * self.scenario.step):
-            for unit, fmu_state in zip(self.units, fmu_states):
+            for unit, fmu_state in zip(self.instances, fmu_states):
                 unit.fmu.setFMUstate(fmu_state)
-            for unit in self.units:            # the caches follow the restored FMUs
+            for unit in self.instances:            # the caches follow the restored FMUs
                 unit.read_outputs()
 
     def result(self) -> RunResult:
@@ -321,7 +322,7 @@ class Master:
                          0.0, self.log.lines)
 
     def close(self) -> None:
-        self._free(getattr(self, "units", []))
+        self._free(getattr(self, "instances", []))
 
     @contextlib.contextmanager
     def _reporting(self, t: float = 0.0):
@@ -332,7 +333,7 @@ class Master:
             raise self._failure(err, f"at t = {t:g} s") from None
 
     def _failure(self, err: FMICallException, when: str) -> CosimError:
-        failed = [u for u in self.units if u.failed]
+        failed = [u for u in self.instances if u.failed]
         unit = getattr(err, "unit", None) or (failed[0] if failed else None)
         who = unit.name if unit else "an FMU"
         return CosimError(f"{who} failed during {self._phase} {when}: "
@@ -343,18 +344,18 @@ class Master:
         self._record(self._data, self._row)
         self._row += 1
 
-    def exchange_and_step(self, units: list[_Unit], t: float, h: float) -> None:
+    def exchange_and_step(self, units: list[FmuInstance], t: float, h: float) -> None:
         raise NotImplementedError
 
     # --- pieces of the run ---------------------------------------------------------------------
-    def _load(self, log: LogCollector) -> list[_Unit]:
+    def _load(self, log: LogCollector) -> list[FmuInstance]:
         sc = self.scenario
         by_name = {}
         for inst in sc.instances.values():
             if inst.fmu not in self.fmu_paths:
                 raise ScenarioError(f"{sc.source}: instances.{inst.name}: unknown FMU {inst.fmu!r}")
             unzip_dir, md = extracted_fmu(Path(self.fmu_paths[inst.fmu]))
-            by_name[inst.name] = _Unit(inst.name, unzip_dir, md, log)
+            by_name[inst.name] = FmuInstance(inst.name, unzip_dir, md, log)
         for con in sc.connections:
             what = f"{sc.source}: connection {con}"
             src, dst = by_name[con.src], by_name[con.dst]
@@ -374,7 +375,7 @@ class Master:
                     raise ScenarioError(f"{inst.name}.{key}: must be an integer, got {value!r}")
         return _dependency_order(list(by_name.values()), sc)
 
-    def _plan(self, units: list[_Unit]) -> list[str]:
+    def _plan(self, units: list[FmuInstance]) -> list[str]:
         """Decide which outputs are read each step; return the recorded column names."""
         sc = self.scenario
         by_name = {u.name: u for u in units}
@@ -394,7 +395,7 @@ class Master:
             unit.prepare()
         return wanted
 
-    def _initialize(self, unit: _Unit, stop: float) -> None:
+    def _initialize(self, unit: FmuInstance, stop: float) -> None:
         """Instantiate, set parameters, take inputs from the already initialized sources."""
         fmu = unit.fmu
         instantiate(fmu, unit.log)
@@ -407,7 +408,7 @@ class Master:
             err.unit = unit
             raise
 
-    def _set_up(self, unit: _Unit, stop: float) -> None:
+    def _set_up(self, unit: FmuInstance, stop: float) -> None:
         fmu = unit.fmu
         fmu.setupExperiment(startTime=0.0, stopTime=stop)
         fmu.enterInitializationMode()
@@ -433,7 +434,7 @@ class Master:
             out[j] = unit.out_buf[idx] if kind == "real" else unit.bool_buf[idx]
 
     @staticmethod
-    def _free(units: list[_Unit]) -> None:
+    def _free(units: list[FmuInstance]) -> None:
         for unit in units:
             # after a failed call FMI allows no further call on that instance (pythonfmu
             # reports every Python exception as fmi2Fatal and has already dropped its objects)
@@ -468,7 +469,7 @@ class GaussSeidelMaster(Master):
 MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster)}
 
 
-def _dependency_order(units: list[_Unit], sc: Scenario) -> list[_Unit]:
+def _dependency_order(units: list[FmuInstance], sc: Scenario) -> list[FmuInstance]:
     """Sources before the units they feed (a cycle keeps the scenario's order within it)."""
     order, placed = [], set()
     remaining = list(units)

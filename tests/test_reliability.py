@@ -96,8 +96,8 @@ def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
     assert "output xi_ddot is nan at t = 0.5 s" in text
     # no call ended in fmi2Fatal (a getter of sewfmu's FMUs logs instead of raising): every
     # instance, the one that failed included, is terminated and freed
-    assert not any(u.failed for u in master.units)
-    assert not any(u.instantiated for u in master.units)
+    assert not any(u.failed for u in master.instances)
+    assert not any(u.instantiated for u in master.instances)
 
 
 # --- state: the master rolls back, every FMU restores (and serializes) exactly ------------------
@@ -141,13 +141,13 @@ def test_every_fmu_state_survives_serialization(fmu_paths):
         with JacobiMaster(sc, fmu_paths) as master:
             for _ in range(master.n_steps // 4):                # on the stop, with ON_STOP
                 master.step()
-            blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.units]
+            blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.instances]
             k, row = master.k, master._row
             for _ in range(master.n_steps // 4):
                 master.step()
             first = master.result()
             master.restore_state((k, row, [u.fmu.deSerializeFMUstate(b)
-                                           for u, b in zip(master.units, blobs)]))
+                                           for u, b in zip(master.instances, blobs)]))
             for _ in range(master.n_steps // 4):
                 master.step()
             second = master.result()
