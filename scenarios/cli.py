@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
-from .format import ScenarioError, catalogue, load, parse_value
+from .format import ScenarioError, catalogue, label_of, load, parse_value
+from .interrupt import Interrupted, interrupt_on_sigterm
 
 
 def _load_with_sets(name: str, sets: list[str]):
@@ -54,9 +56,15 @@ def cmd_run(args) -> None:
         print(f"{args.scenario}: results in {out}/")
         print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
         return
+    from .progress import TerminalProgress
+
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
-    summary = run_scenario(scenario, out, plot=args.plot)
+    progress = TerminalProgress(scenario.name)
+    try:
+        summary = run_scenario(scenario, out, plot=args.plot, progress=progress)
+    finally:
+        progress.close()
     print(f"{scenario.name}: results in {out}/")
     figures = summary.get("runs", {"": summary})
     for label, fig in figures.items():
@@ -88,7 +96,8 @@ def cmd_sweep(args) -> None:
     failed = [r for r in rows if r["status"] != "ok"]
     print(f"{scenario.name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
     for row in failed:
-        print(f"  failed: {row['key']}: {row['error']}")
+        values = ",".join(label_of(name, row[name]) for name, _ in points[0].values)
+        print(f"  failed: {values}: {row['error']}")
     if args.plot and scenario.analysis:
         swept = [name for name, _ in points[0].values]
         figures = [f for f in getattr(analyses.module(scenario.analysis), "FIGURES", ())
@@ -212,7 +221,8 @@ def main(argv=None) -> int:
                    help="override a parameter for every point")
     p.add_argument("--grid", action="append", metavar="INSTANCE.PARAM=V1,V2,...",
                    help="sweep this parameter over these values (adds to the file's grid)")
-    p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
+    p.add_argument("--workers", type=_whole_number, help="local worker processes (default: all "
+                                                         "cores)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on a Dask cluster, e.g. tcp://127.0.0.1:8786")
     p.add_argument("--out", help="output folder (default: results/SCENARIO_sweep/); an "
@@ -221,22 +231,59 @@ def main(argv=None) -> int:
     p.add_argument("--plot", action="store_true", help="plot the figures against the parameters")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sweep)
+    for stream in (sys.stdout, sys.stderr):
+        # a terminal that is not UTF-8 gets escapes for ω or °, not a UnicodeEncodeError
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     args = parser.parse_args(argv)
+    interrupt_on_sigterm()
     try:
         args.func(args)
-    except KeyboardInterrupt:
-        print("sewfmu: interrupted", file=sys.stderr)
-        return 130
+        sys.stdout.flush()
+    except KeyboardInterrupt as err:
+        status = err.exit_status if isinstance(err, Interrupted) else 130
+        name = err.args[0] if isinstance(err, Interrupted) else "SIGINT"
+        print(f"sewfmu: interrupted ({name}); the interrupted run wrote no results",
+              file=sys.stderr)
+        return status
+    except BrokenPipeError:
+        # the reader went away (`sewfmu list | head -1`): stop quietly, as other tools do
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except Exception as err:        # one clear line for the user; --debug for the traceback
         if args.debug:
             raise
-        from .hosts import HostError
-        from .master import CosimError
-        known = (ScenarioError, CosimError, HostError)
-        kind = "" if isinstance(err, known) else f"{type(err).__name__}: "
-        print(f"sewfmu: error: {kind}{err}", file=sys.stderr)
+        print(f"sewfmu: error: {explain(err, args.command)}", file=sys.stderr)
         return 1
     return 0
+
+
+def explain(err: Exception, command: str) -> str:
+    """An error as one line that says what was wrong and where."""
+    from .hosts import HostError
+    from .master import CosimError
+    from .outputs import OutputError
+
+    if isinstance(err, (ScenarioError, CosimError, HostError, OutputError)):
+        return " ".join(str(err).split())
+    if isinstance(err, OSError) and err.strerror:
+        where = f"{err.filename}: " if err.filename else ""
+        return f"{where}{err.strerror}"
+    if isinstance(err, MemoryError):
+        return f"out of memory during `sewfmu {command}` (a smaller experiment.record_every " \
+               f"or a shorter run needs less)"
+    return (f"unexpected {type(err).__name__} during `sewfmu {command}`: {err} "
+            f"(a bug in sewfmu: please report it; --debug shows where)")
+
+
+def _whole_number(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
+    return value
 
 
 if __name__ == "__main__":

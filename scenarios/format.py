@@ -31,6 +31,7 @@ Every mistake is a ScenarioError that names the file and the key.
 """
 from __future__ import annotations
 
+import codecs
 import copy
 import hashlib
 import math
@@ -118,6 +119,14 @@ class Scenario:
                                 f"(instances: {', '.join(self.instances)})")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ScenarioError(f"{origin} {target}: value must be a number, got {value!r}")
+        try:
+            finite = math.isfinite(float(value))
+        except OverflowError:               # an integer beyond any float
+            finite = False
+        if not finite:
+            raise ScenarioError(f"{origin} {target}: parameter {key} must be a finite number "
+                                f"within the range of a float (about ±1.8e308), got "
+                                f"{_short(value)}")
         self.instances[inst].parameters[key] = value
 
     def _set_experiment(self, key: str, value: Any, origin: str) -> None:
@@ -144,12 +153,29 @@ class Scenario:
             self.stop_time = None
 
 
+def label_of(target: str, value: Any) -> str:
+    """`instance.parameter=value` as a short label (a folder name, a legend)."""
+    if isinstance(value, float):
+        return f"{target}={value:g}"
+    return f"{target}={value}"
+
+
+def _short(value: Any) -> str:
+    """A value for a message: huge integers cut to their first and last digits."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:12]}...{text[-6:]} ({len(text)} digits)"
+
+
 def _positive(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError(f"{where}: must be a number, got {value!r}")
-    if not math.isfinite(value) or value <= 0:
-        raise ScenarioError(f"{where}: must be a positive finite number, got {value!r}")
-    return float(value)
+        raise ScenarioError(f"{where}: must be a number, got {_short(value)}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number) or number <= 0:
+        raise ScenarioError(f"{where}: must be a positive finite number, got {_short(value)}")
+    return number
 
 
 def parse_value(text: str, where: str) -> Any:
@@ -184,15 +210,34 @@ def resolve(name_or_path: str) -> Path:
 def load(name_or_path: str) -> Scenario:
     path = resolve(name_or_path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = _text_of(path.read_bytes(), path)
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{path}: not valid TOML: {err}") from None
     except OSError as err:
-        raise ScenarioError(f"{path}: cannot read: {err}") from None
+        raise ScenarioError(f"{path}: cannot read: {err.strerror or err}") from None
     scenario = from_dict(data, path.stem, str(path))
     scenario.digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
     return scenario
+
+
+def _text_of(raw: bytes, path: Path) -> str:
+    """A scenario file's text: UTF-8 (TOML's encoding), with or without a byte-order mark; a
+    UTF-16 file (with its mark, as some Windows editors save) is read too. Anything else is an
+    error that says where the first byte that is not UTF-8 is."""
+    for mark, codec in ((codecs.BOM_UTF8, "utf-8"), (codecs.BOM_UTF16_LE, "utf-16-le"),
+                        (codecs.BOM_UTF16_BE, "utf-16-be")):
+        if raw.startswith(mark):
+            raw, encoding = raw[len(mark):], codec
+            break
+    else:
+        encoding = "utf-8"
+    try:
+        return raw.decode(encoding)
+    except UnicodeDecodeError as err:
+        line = raw[:err.start].count(b"\n") + 1
+        raise ScenarioError(f"{path}: line {line}: byte 0x{raw[err.start]:02x} is not "
+                            f"{encoding.upper()} text; save the file as UTF-8") from None
 
 
 def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
@@ -226,9 +271,18 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     if "step" not in exp:
         raise ScenarioError(f"{source}: missing experiment.step")
 
+    if not isinstance(data.get("description", ""), str):
+        raise ScenarioError(f"{source}: description must be a string")
+    if "shaft" in exp and "stop_time" in exp:
+        raise ScenarioError(f"{source}: experiment.shaft names the shaft whose revolutions are "
+                            f"counted; with stop_time it has no use: remove one of them")
     instances = {}
     for inst_name, spec in _table(data, "instances", source).items():
         where = f"{source}: instances.{inst_name}"
+        if not inst_name.strip() or "." in inst_name or "->" in inst_name \
+                or inst_name != inst_name.strip() or inst_name == "experiment":
+            raise ScenarioError(f"{where}: an instance name must be non-empty, without '.', "
+                                f"'->' or surrounding spaces, and not 'experiment'")
         if not isinstance(spec, dict) or not isinstance(spec.get("fmu"), str):
             raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
         for key in spec:
@@ -274,22 +328,52 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     connections = data.get("connections", [])
     if not isinstance(connections, list):
         raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
+    sources: dict[tuple[str, str], Connection] = {}
     for text in connections:
-        scenario.connections.append(_parse_connection(text, instances, source))
-    if scenario.record is not None and not isinstance(scenario.record, list):
-        raise ScenarioError(f"{source}: record must be a list of \"instance.variable\" strings")
+        con = _parse_connection(text, instances, source)
+        other = sources.get((con.dst, con.dst_var))
+        if other is not None:      # FMI inputs take one value: a second source would silently win
+            raise ScenarioError(f"{source}: connections: input {con.dst}.{con.dst_var} has two "
+                                f"sources, {other.src}.{other.src_var} and "
+                                f"{con.src}.{con.src_var}; an input takes one")
+        sources[(con.dst, con.dst_var)] = con
+        scenario.connections.append(con)
+    _check_record(scenario.record, source)
     if scenario.compare is not None:
-        cmp = scenario.compare
-        if not isinstance(cmp, dict) or not isinstance(cmp.get("parameter"), str) \
-                or not isinstance(cmp.get("values"), list) or not cmp["values"]:
-            raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
-                                f"a non-empty list values = [...]")
-        probe = scenario.copy()
-        for value in cmp["values"]:
-            probe.set_value(cmp["parameter"], value, origin=f"{source}: compare")
+        _check_compare(scenario, source)
     if scenario.sweep is not None:
         _check_sweep(scenario.sweep, source)
     return scenario
+
+
+def _check_record(record: Any, source: str) -> None:
+    if record is None:
+        return
+    if not isinstance(record, list) or not all(isinstance(r, str) for r in record):
+        raise ScenarioError(f"{source}: record must be a list of \"instance.variable\" strings")
+    twice = sorted({r for r in record if record.count(r) > 1})
+    if twice:
+        raise ScenarioError(f"{source}: record lists {twice[0]!r} more than once")
+
+
+def _check_compare(scenario: Scenario, source: str) -> None:
+    """[compare] parameter = "instance.parameter" (or "experiment.key"), values = [distinct]."""
+    cmp = scenario.compare
+    if not isinstance(cmp, dict) or not isinstance(cmp.get("parameter"), str) \
+            or not isinstance(cmp.get("values"), list) or not cmp["values"]:
+        raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
+                            f"a non-empty list values = [...]")
+    unknown = set(cmp) - {"parameter", "values"}
+    if unknown:
+        raise ScenarioError(f"{source}: unknown key compare.{sorted(unknown)[0]} "
+                            f"(known: parameter, values)")
+    labels = [label_of(cmp["parameter"], v) for v in cmp["values"]]
+    twice = sorted({label for label in labels if labels.count(label) > 1})
+    if twice:
+        raise ScenarioError(f"{source}: compare.values gives {twice[0]} more than once")
+    probe = scenario.copy()
+    for value in cmp["values"]:
+        probe.set_value(cmp["parameter"], value, origin=f"{source}: compare")
 
 
 def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict[str, str]:

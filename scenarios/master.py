@@ -37,6 +37,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2CallbackAllocateMemoryTYPE, \
     fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Real, \
     fmi2ValueReference
 
+from . import interrupt
 from .format import Scenario, ScenarioError
 
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -73,6 +74,24 @@ def extracted_fmu(path: Path) -> tuple[str, object]:
         atexit.register(shutil.rmtree, unzip_dir, True)
         _EXTRACTED[key] = (unzip_dir, read_model_description(str(path)))
     return _EXTRACTED[key]
+
+
+def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
+    """Every parameter the scenario sets exists in its FMU and fits its type: checked from the
+    modelDescriptions alone, before any FMU runs (a sweep checks every point so)."""
+    for inst in scenario.instances.values():
+        md = extracted_fmu(Path(fmu_paths[inst.fmu]))[1]
+        variables = {v.name: v for v in md.modelVariables}
+        for key, value in inst.parameters.items():
+            v = variables.get(key)
+            if v is None or v.causality != "parameter":
+                names = sorted(n for n, x in variables.items() if x.causality == "parameter")
+                raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: {inst.name} "
+                                    f"({md.modelName}) has no parameter {key!r} "
+                                    f"(has: {', '.join(names)})")
+            if v.type == "Integer" and value != int(value):
+                raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: must be an integer, "
+                                    f"got {value!r}")
 
 
 def _reason(lines: list[str], err: Exception) -> str:
@@ -238,17 +257,27 @@ class Master:
 
     name = "base"
 
+    # how often (in communication steps) the run reports its progress
+    PROGRESS_EVERY = 1024
+
     def __init__(self, scenario: Scenario, fmu_paths: dict[str, Path]):
         self.scenario = scenario
         self.fmu_paths = fmu_paths
 
     # --- the run -------------------------------------------------------------------------------
-    def run(self) -> RunResult:
-        """Open, step to the end, close: the whole scenario."""
+    def run(self, progress=None) -> RunResult:
+        """Open, step to the end, close: the whole scenario. `progress(done, total)`, if given,
+        hears of the steps done every PROGRESS_EVERY steps. Ctrl-C or SIGTERM interrupt the run
+        between two communication steps (interrupt.Interrupted), never inside an FMU."""
         started = clock.perf_counter()
-        with self:
+        every = self.PROGRESS_EVERY
+        with interrupt.deferred(), self:
             while self.k < self.n_steps:
                 self.step()
+                if interrupt.pending:
+                    interrupt.raise_pending()
+                if progress is not None and self.k % every == 0:
+                    progress(self.k, self.n_steps)
             result = self.result()
         result.wall_time = clock.perf_counter() - started
         return result
@@ -367,12 +396,7 @@ class Master:
                 raise ScenarioError(f"{what}: incompatible units {out_var.unit!r} -> {in_var.unit!r}")
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))
-        for inst in sc.instances.values():
-            unit = by_name[inst.name]
-            for key, value in inst.parameters.items():
-                v = unit.variable(key, ("parameter",), f"{sc.source}: {inst.name}.{key}")
-                if v.type == "Integer" and value != int(value):
-                    raise ScenarioError(f"{inst.name}.{key}: must be an integer, got {value!r}")
+        check_parameters(sc, self.fmu_paths)
         return _dependency_order(list(by_name.values()), sc)
 
     def _plan(self, units: list[FmuInstance]) -> list[str]:
@@ -485,5 +509,5 @@ def _dependency_order(units: list[FmuInstance], sc: Scenario) -> list[FmuInstanc
     return order
 
 
-def run(scenario: Scenario, fmu_paths: dict[str, Path]) -> RunResult:
-    return MASTER_CLASSES[scenario.master](scenario, fmu_paths).run()
+def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:
+    return MASTER_CLASSES[scenario.master](scenario, fmu_paths).run(progress)

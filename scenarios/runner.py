@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 import time as clock
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,8 +16,9 @@ import numpy as np
 from components.build import default_fmu_dir, ensure_built
 
 from . import analyses
-from .format import Scenario, ScenarioError
+from .format import Scenario, ScenarioError, label_of
 from .master import RunResult, run
+from .outputs import replacing, write_atomic
 
 
 def _feed_headline(study: dict) -> dict:
@@ -63,14 +62,15 @@ STUDIES = {
 def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
     """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
     and, with plot, NAME.png; return the headline figures."""
-    study, out_dir = STUDIES[name], Path(out_dir)
+    study = STUDIES[name]
     module = analyses.module(study.module)
     data = getattr(module, study.compute)()
     headline = study.headline(data)
-    write_json(data, out_dir / "study.json")
-    write_json(headline, out_dir / "summary.json")
-    if plot:
-        getattr(module, study.plot)(data, out_dir / f"{name}.png")
+    with replacing(out_dir) as staging:
+        write_json(data, staging / "study.json")
+        write_json(headline, staging / "summary.json")
+        if plot:
+            getattr(module, study.plot)(data, staging / f"{name}.png")
     return headline
 
 
@@ -103,29 +103,16 @@ def summarize(result: RunResult) -> dict:
             **figures}
 
 
-def _write_atomic(path: Path, write) -> None:
-    """Write via a temporary file in the same folder, then rename: never a half-written file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
 def write_csv(result: RunResult, path: Path) -> None:
     names = list(result.columns)
     table = np.column_stack([result.time] + [result.columns[n] for n in names])
     header = ",".join(["time"] + names)
-    _write_atomic(path, lambda f: np.savetxt(f, table, delimiter=",", header=header, comments="",
+    write_atomic(path, lambda f: np.savetxt(f, table, delimiter=",", header=header, comments="",
                                              fmt="%.17g"))
 
 
 def write_json(data, path: Path) -> None:
-    _write_atomic(path, lambda f: (json.dump(data, f, indent=2), f.write("\n")))
+    write_atomic(path, lambda f: (json.dump(data, f, indent=2), f.write("\n")))
 
 
 def variants(scenario: Scenario) -> list[tuple[str, Scenario]]:
@@ -137,7 +124,7 @@ def variants(scenario: Scenario) -> list[tuple[str, Scenario]]:
     for value in scenario.compare["values"]:
         sc = scenario.copy()
         sc.set_value(param, value, origin=f"{scenario.source}: compare")
-        out.append((f"{param}={value:g}", sc))
+        out.append((label_of(param, value), sc))
     return out
 
 
@@ -172,28 +159,35 @@ def _number(text: str) -> float | int:
 
 
 def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
-                 fmu_dir: Path | None = None) -> dict:
-    """Run (each variant of) a scenario into out_dir; return the summary written there."""
-    out_dir = Path(out_dir)
+                 fmu_dir: Path | None = None, progress=None) -> dict:
+    """Run (each variant of) a scenario into out_dir; return the summary written there.
+
+    Every run of the scenario is done before out_dir is touched, and out_dir is then replaced
+    whole (outputs.replacing): a failed or interrupted run leaves the previous results as they
+    were. `progress(label, done, total)` hears of each run's steps."""
     runs = []
     for label, sc in variants(scenario):
         paths = fmus_for(sc, fmu_dir)
-        result = run(sc, paths)
-        where = out_dir / label if label else out_dir
-        write_csv(result, where / "results.csv")
-        summary = {**summarize(result), "provenance": provenance(sc, paths)}
-        write_json(summary, where / "summary.json")
-        runs.append((label, result, summary))
+        report = None if progress is None else \
+            (lambda done, total, label=label: progress(label, done, total))
+        result = run(sc, paths, report)
+        runs.append((label, result, {**summarize(result), "provenance": provenance(sc, paths)}))
     if scenario.compare:
         summary = {"scenario": scenario.name, "compare": scenario.compare["parameter"],
                    "runs": {label: s for label, _, s in runs}}
-        write_json(summary, out_dir / "summary.json")
     else:
         summary = runs[0][2]
-    if plot and scenario.analysis:
-        curves = [(label or scenario.name, result) for label, result, _ in runs]
-        analyses.module(scenario.analysis).plot(curves, out_dir / f"{scenario.name}.png",
-                                                scenario.description)
+    with replacing(out_dir) as staging:
+        for label, result, own in runs:
+            where = staging / label if label else staging
+            write_csv(result, where / "results.csv")
+            write_json(own, where / "summary.json")
+        if scenario.compare:
+            write_json(summary, staging / "summary.json")
+        if plot and scenario.analysis:
+            curves = [(label or scenario.name, result) for label, result, _ in runs]
+            analyses.module(scenario.analysis).plot(curves, staging / f"{scenario.name}.png",
+                                                    scenario.description)
     return summary
 
 
@@ -256,17 +250,17 @@ def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | Non
     return rows (figure, sewfmu, host, difference) and the two summaries."""
     from .hosts import run_in_host
 
-    out_dir = Path(out_dir)
-    ssp = export(scenario, out_dir / f"{scenario.name}.ssp", fmu_dir)
-    own = simulate(scenario, fmu_dir)
-    time, columns, wall = run_in_host(host, ssp, scenario, list(own.columns),
-                                      out_dir / "results.csv")
-    time, columns = _end_at(time, columns, scenario.end_time())
-    other = RunResult(scenario, time, columns, wall)
-    write_csv(other, out_dir / "results.csv")
-    mine, theirs = summarize(own), summarize(other)
-    theirs["host"] = host
-    write_json(theirs, out_dir / "summary.json")
+    with replacing(out_dir) as staging:
+        ssp = export(scenario, staging / f"{scenario.name}.ssp", fmu_dir)
+        own = simulate(scenario, fmu_dir)
+        time, columns, wall = run_in_host(host, ssp, scenario, list(own.columns),
+                                          staging / "results.csv")
+        time, columns = _end_at(time, columns, scenario.end_time())
+        other = RunResult(scenario, time, columns, wall)
+        write_csv(other, staging / "results.csv")
+        mine, theirs = summarize(own), summarize(other)
+        theirs["host"] = host
+        write_json(theirs, staging / "summary.json")
     rows = []
     for key, value in mine.items():
         if key in ("scenario", "master", "step", "stop_time"):

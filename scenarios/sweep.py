@@ -3,26 +3,30 @@
 A sweep is a list of points, each a set of `instance.parameter = value` (or `experiment.key`)
 overrides of one scenario: the Cartesian product of a grid, or an explicit list. Points run in
 worker *processes* (the FMUs' Python holds one interpreter lock, so threads would not help): a
-local process pool by default, Dask distributed when a scheduler address is given.
+local pool (scenarios/workers.py) by default, Dask distributed when a scheduler address is given.
 
 Every finished point is appended at once, as one JSON line, to `points.jsonl` in the output
-folder, so an interrupted sweep resumes where it stopped: points already there are skipped. A
-point that fails is recorded with its error and the sweep goes on. At the end `sweep.csv` holds
-one row per point: the swept parameters, the status, and every key figure.
+folder. A point is identified by everything that decides its result: the scenario's content with
+the fixed settings, the point's own values and the code of the FMUs. A rerun into the same folder
+reuses the points whose identity it finds there (an interrupted sweep resumes), recomputes what
+changed, and tries again the points that failed. A point that fails, or whose worker process
+dies, is recorded with its cause and the sweep goes on. At the end `sweep.csv` holds one row per
+point: the swept parameters, the status, and every key figure.
 """
 from __future__ import annotations
 
-import concurrent.futures as cf
 import csv
+import hashlib
 import io
 import itertools
 import json
-import multiprocessing
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .format import Scenario, ScenarioError, parse_value
+from .format import Scenario, ScenarioError, label_of, parse_value
+from .outputs import remove_debris, write_atomic
 
 POINTS_FILE = "points.jsonl"
 TABLE_FILE = "sweep.csv"
@@ -34,13 +38,31 @@ class Point:
     values: tuple[tuple[str, object], ...]      # (instance.parameter, value), in grid order
 
     @property
-    def key(self) -> str:
-        return json.dumps(dict(self.values), sort_keys=True)
-
-    @property
     def label(self) -> str:
-        return ",".join(f"{k}={v:g}" if isinstance(v, (int, float)) else f"{k}={v}"
-                        for k, v in self.values)
+        return ",".join(label_of(k, v) for k, v in self.values)
+
+    def identity(self, settings: str) -> str:
+        """The point's key: a hash of the sweep's settings (see `settings_of`) and its values."""
+        text = json.dumps({"settings": settings, "point": dict(self.values)}, sort_keys=True)
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
+
+
+def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
+    """Everything besides a point's own values that decides its result: the scenario's content
+    with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
+    from components.build import fmu_version
+
+    content = {
+        "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
+                      for n, i in scenario.instances.items()},
+        "connections": [str(c) for c in scenario.connections],
+        "record": scenario.record, "analysis": scenario.analysis, "roles": scenario.roles,
+        "experiment": {"step": scenario.step, "master": scenario.master,
+                       "stop_time": scenario.stop_time, "revolutions": scenario.revolutions,
+                       "shaft": scenario.shaft, "record_every": scenario.record_every},
+        "fmus": {fmu: fmu_version(Path(path)) for fmu, path in sorted(fmu_paths.items())},
+    }
+    return json.dumps(content, sort_keys=True, default=repr)
 
 
 def grid_points(grid: dict[str, list]) -> list[Point]:
@@ -71,6 +93,13 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
         points = grid_points(grid)
     else:
         raise ScenarioError(f"{scenario.source}: nothing to sweep: no [sweep] table and no --grid")
+    seen = {}
+    for point in points:
+        values = json.dumps(dict(point.values), sort_keys=True)
+        if values in seen:
+            raise ScenarioError(f"{scenario.source}: sweep: points {seen[values]} and "
+                                f"{point.index} are the same ({point.label})")
+        seen[values] = point.index
     for point in points:                        # every override must be valid before any runs
         probe = scenario.copy()
         for target, value in point.values:
@@ -78,11 +107,11 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
     return points
 
 
-def run_point(scenario: Scenario, point: Point, results_dir: str | None = None) -> dict:
+def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
     from .runner import simulate, summarize, write_csv
 
-    row = {"index": point.index, "key": point.key, **dict(point.values)}
+    row = {"index": point.index, "key": key, **dict(point.values)}
     try:
         sc = scenario.copy()
         for target, value in point.values:
@@ -92,9 +121,13 @@ def run_point(scenario: Scenario, point: Point, results_dir: str | None = None) 
         if results_dir:
             write_csv(result, Path(results_dir) / point.label / "results.csv")
     except Exception as err:                     # recorded, and the sweep goes on
-        return {**row, "status": "failed", "error": " ".join(str(err).split())}
+        return failed_row(row, err)
     figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step")}
     return {**row, "status": "ok", **figures}
+
+
+def failed_row(row: dict, err: Exception) -> dict:
+    return {**row, "status": "failed", "error": " ".join(str(err).split())}
 
 
 def _cost(scenario: Scenario, point: Point) -> float:
@@ -109,85 +142,116 @@ def _cost(scenario: Scenario, point: Point) -> float:
         return 0.0
 
 
-def _done(out_dir: Path) -> dict[str, dict]:
-    """Points finished by an earlier (perhaps interrupted) run; a torn last line is ignored."""
-    done = {}
+def warn(message: str) -> None:
+    print(f"sewfmu: warning: {message}", file=sys.stderr)
+
+
+def finished_points(out_dir: Path) -> dict[str, dict]:
+    """Points that an earlier (perhaps interrupted) run finished well, by key. Damaged lines (torn
+    by a kill, emptied, not a point) are skipped with a warning; failed points are left out, so
+    that they are tried again."""
+    done, damaged = {}, []
     path = out_dir / POINTS_FILE
-    if path.exists():
-        for line in path.read_text().splitlines():
+    if not path.exists():
+        return done
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for number, line in enumerate(f, 1):
+            if not line.strip():
+                continue
             try:
                 row = json.loads(line)
             except json.JSONDecodeError:
+                row = None
+            if not isinstance(row, dict) or not isinstance(row.get("key"), str) \
+                    or "status" not in row:
+                damaged.append(number)
                 continue
-            done[row["key"]] = row
+            if row["status"] == "ok":
+                done[row["key"]] = row
+    if damaged:
+        shown = ", ".join(map(str, damaged[:10])) + (" ..." if len(damaged) > 10 else "")
+        warn(f"{path}: skipped {len(damaged)} damaged line(s) ({shown}); those points run again")
     return done
+
+
+def _open_log(path: Path):
+    """points.jsonl for appending, starting on a fresh line (after a torn last line, the next
+    row must not be glued onto it)."""
+    log = open(path, "a+b")
+    log.seek(0, os.SEEK_END)
+    if log.tell():
+        log.seek(-1, os.SEEK_END)
+        if log.read(1) != b"\n":
+            log.write(b"\n")
+    return log
 
 
 def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: int | None = None,
               scheduler: str | None = None, keep_results: bool = False,
               progress: bool = True) -> list[dict]:
-    """Run every point not yet in out_dir; return all rows, in point order."""
+    """Run every point not yet done in out_dir; return all rows, in point order."""
+    from .master import check_parameters
     from .runner import fmus_for
 
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        raise ScenarioError(f"--workers must be a whole number >= 1, got {workers!r}")
     out_dir = Path(out_dir)
+    paths = fmus_for(scenario)            # built once here, not concurrently in every worker
+    for point in points:                  # a misspelt parameter fails here, before any point
+        probe = scenario.copy()
+        for target, value in point.values:
+            probe.set_value(target, value, origin=f"{scenario.source}: sweep")
+        check_parameters(probe, paths)
     out_dir.mkdir(parents=True, exist_ok=True)
-    done = _done(out_dir)
+    remove_debris(out_dir, recursive=True)
+    settings = settings_of(scenario, paths)
+    keys = {p.index: p.identity(settings) for p in points}
+    done = finished_points(out_dir)
     # longest first: the last points to finish are then short ones, and the workers end together
-    todo = sorted((p for p in points if p.key not in done), key=lambda p: -_cost(scenario, p))
-    fmus_for(scenario)            # build once here, not concurrently in every worker
+    todo = sorted((p for p in points if keys[p.index] not in done),
+                  key=lambda p: -_cost(scenario, p))
     results_dir = str(out_dir / "points") if keep_results else None
-    rows = {p.key: done[p.key] for p in points if p.key in done}
+    rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
     bar = _progress(len(points), len(rows), progress, scenario.name)
-    with open(out_dir / POINTS_FILE, "a") as log:
-        for row in _execute(scenario, todo, results_dir, workers, scheduler):
-            log.write(json.dumps(row) + "\n")
+    with _open_log(out_dir / POINTS_FILE) as log:
+        for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
+            log.write((json.dumps(row) + "\n").encode("utf-8"))
             log.flush()
             rows[row["key"]] = row
             bar.update(1)
     bar.close()
-    ordered = [rows[p.key] for p in points]
+    ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
     _write_table(ordered, [name for name, _ in points[0].values], out_dir / TABLE_FILE)
     return ordered
 
 
-def _execute(scenario, todo, results_dir, workers, scheduler):
+def _execute(scenario, todo, keys, results_dir, workers, scheduler):
     """Yield finished rows as they complete: Dask when a scheduler is given, else processes."""
     if not todo:
         return
     if scheduler:
         from distributed import Client, as_completed
         with Client(scheduler) as client:
-            futures = [client.submit(run_point, scenario, p, results_dir, pure=False)
-                       for p in todo]
+            futures = [client.submit(run_point, scenario, p, keys[p.index], results_dir,
+                                     pure=False) for p in todo]
             for future in as_completed(futures):
                 yield future.result()
         return
-    workers = workers or os.cpu_count() or 1
-    # forkserver: workers fork from a clean server process that has imported sewfmu once, so
-    # they start fast and do not inherit this process's loaded FMU libraries and threads
-    context = multiprocessing.get_context("forkserver")
-    context.set_forkserver_preload(["scenarios.runner"])
-    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=context)
-    try:
-        futures = [pool.submit(run_point, scenario, p, results_dir) for p in todo]
-        for future in cf.as_completed(futures):
-            yield future.result()
-    except BaseException:
-        # Ctrl-C (or any error): stop the workers now rather than after their current point;
-        # what finished is already in points.jsonl, and a rerun resumes from there
-        workers_alive = list(getattr(pool, "_processes", {}).values())
-        pool.shutdown(wait=False, cancel_futures=True)
-        for process in workers_alive:
-            process.terminate()
-        for process in workers_alive:
-            process.join(timeout=5)
-        raise
-    pool.shutdown(wait=True)
+    from .workers import run_tasks
+
+    by_key = {keys[p.index]: p for p in todo}
+    tasks = [(keys[p.index], run_point, (scenario, p, keys[p.index], results_dir)) for p in todo]
+    for key, answer in run_tasks(tasks, workers or os.cpu_count() or 1,
+                                 preload=["scenarios.runner"]):
+        if isinstance(answer, Exception):      # the worker died, or run_point itself failed
+            point = by_key[key]
+            yield failed_row({"index": point.index, "key": key, **dict(point.values)}, answer)
+        else:
+            yield answer
 
 
 def _write_table(rows: list[dict], swept: list[str], path: Path) -> None:
-    from .runner import _write_atomic
-
     columns = ["index"] + swept + ["status"]
     for row in rows:
         for key in row:
@@ -200,7 +264,7 @@ def _write_table(rows: list[dict], swept: list[str], path: Path) -> None:
         writer.writeheader()
         writer.writerows(rows)
 
-    _write_atomic(path, write)
+    write_atomic(path, write)
 
 
 class _NoBar:
@@ -252,5 +316,5 @@ def plot_table(rows: list[dict], swept: list[str], figures: list[str], path: Pat
     fig.suptitle("\n".join(textwrap.wrap(title + (f" ({failed} points failed)" if failed else ""),
                                          100)), fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"), binary=True)
     plt.close(fig)

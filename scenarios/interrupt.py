@@ -1,0 +1,70 @@
+"""Ctrl-C and SIGTERM as an interruption, never as an FMU failure.
+
+The FMUs' Python code runs in this process's interpreter (pythonfmu embeds it), so a
+KeyboardInterrupt raised by Python's default SIGINT handler lands, most of the time, inside an
+FMU's doStep; pythonfmu answers it with fmi2Fatal and the run would end as "shaft failed during
+step". Within `deferred()` the signals only mark the interruption; the master raises it between
+communication steps (`raise_pending`), where no FMU code runs and every instance can still be
+freed. Outside of it (reading, writing, plotting) the CLI lets SIGTERM interrupt like Ctrl-C.
+"""
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+pending: list[int] = []         # signals received within deferred(), oldest first
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was interrupted by a signal; exit status 128 + the signal's number."""
+
+    def __init__(self, signum: int = signal.SIGINT):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum
+
+
+def raise_pending() -> None:
+    if pending:
+        signum = pending[0]
+        pending.clear()
+        raise Interrupted(signum)
+
+
+def _mark(signum, frame) -> None:
+    pending.append(signum)
+
+
+def _interrupt(signum, frame) -> None:
+    raise Interrupted(signum)
+
+
+def interrupt_on_sigterm() -> None:
+    """SIGTERM raises Interrupted like Ctrl-C does (Python's default would end the process
+    without cleaning up: staging folders, worker processes)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _interrupt)
+
+
+@contextlib.contextmanager
+def deferred():
+    """Within the block SIGINT and SIGTERM only mark the interruption; it is raised by
+    `raise_pending()`, or when the block ends."""
+    if threading.current_thread() is not threading.main_thread():
+        yield                    # signal handlers belong to the main thread
+        return
+    previous = {s: signal.getsignal(s) for s in SIGNALS}
+    for s in SIGNALS:
+        signal.signal(s, _mark)
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    raise_pending()

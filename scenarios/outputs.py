@@ -1,0 +1,133 @@
+"""Where a run's files go: written whole or not at all, with the user's umask, and no debris.
+
+- `write_atomic` writes a file through a temporary beside it and renames it into place, so a
+  reader never sees half a file; the file gets the permissions the user's umask gives (Python's
+  temporary files would be 0600).
+- `replacing(folder)` gives a run a staging folder beside its output folder; only when the whole
+  run has succeeded does the staging folder replace the old one, so a run that fails or is
+  interrupted (in its third [compare] variant, say) leaves the previous results as they were,
+  never a mix of old and new.
+- Temporaries carry the writing process's id in their names (".NAME.PID.tmp",
+  ".FOLDER.PID.partial"). A killed process cannot clean up after itself; the next run into the
+  same place removes what dead processes left (`remove_debris`).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import shutil
+from pathlib import Path
+
+_DEBRIS = re.compile(r"^\..+\.(\d+)\.(tmp|partial|old)$")
+
+
+class OutputError(ValueError):
+    """An output folder sewfmu will not write into, named with the reason."""
+
+
+def umask() -> int:
+    """The process's umask (read without changing it where Linux allows)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)          # elsewhere: the classic read-by-setting, restored at once
+    os.umask(mask)
+    return mask
+
+
+def _temporary(path: Path, kind: str) -> Path:
+    return path.parent / f".{path.name}.{os.getpid()}.{kind}"
+
+
+def write_atomic(path: Path, write, binary: bool = False) -> None:
+    """Write a file via a temporary in the same folder, then rename: never a half-written file.
+    `write(f)` receives the open temporary (text in UTF-8, or binary)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _temporary(path, "tmp")
+    try:
+        # os.open with 0o666 lets the umask decide the permissions, as for any file a user writes
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+        mode = "wb" if binary else "w"
+        with (os.fdopen(fd, mode) if binary
+              else os.fdopen(fd, mode, newline="", encoding="utf-8")) as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:         # someone else's process: alive
+        return True
+    return True
+
+
+def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
+    """Remove the temporaries that dead processes left in folder (and below it); return them."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return []
+    removed = []
+    entries = folder.rglob(".*") if recursive else folder.glob(".*")
+    for entry in list(entries):
+        match = _DEBRIS.match(entry.name)
+        if not match or int(match.group(1)) == os.getpid() or _alive(int(match.group(1))):
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                entry.unlink()
+        removed.append(entry)
+    return removed
+
+
+def _check_replaceable(folder: Path) -> None:
+    """A run replaces its output folder whole: refuse folders that hold something else."""
+    here = Path.cwd().resolve()
+    target = folder.resolve()
+    if target == here or target in here.parents:
+        raise OutputError(f"output folder {folder}: this is the current folder (or holds it); "
+                          f"a run replaces its output folder whole, give a folder of its own")
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"output folder {folder}: exists and is not a folder")
+    if folder.is_dir() and any(folder.iterdir()) and not (folder / "summary.json").exists():
+        raise OutputError(f"output folder {folder}: holds files that are not a sewfmu result "
+                          f"(no summary.json); a run replaces its output folder whole, so give "
+                          f"an empty or new folder")
+
+
+@contextlib.contextmanager
+def replacing(folder: Path):
+    """Yield a staging folder; when the block succeeds it becomes `folder` (the previous results
+    go), when it fails or is interrupted it is removed and `folder` stays as it was."""
+    folder = Path(folder)
+    _check_replaceable(folder)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    remove_debris(folder.parent)
+    staging = _temporary(folder, "partial")
+    shutil.rmtree(staging, ignore_errors=True)
+    os.mkdir(staging)                        # mode from the umask
+    try:
+        yield staging
+        if folder.exists():
+            old = _temporary(folder, "old")
+            os.rename(folder, old)
+            os.rename(staging, folder)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise

@@ -1,0 +1,161 @@
+"""Worker processes for a sweep, one point at a time each, tied to the main process's life.
+
+concurrent.futures' process pool cannot say which point a dead worker was running: one worker
+killed (as the out-of-memory killer does) breaks the whole pool and every pending point with it.
+Here each worker holds one point at a time through its own pipe, so a worker that dies is one
+failed point, with the cause (its signal or exit status), and a fresh worker takes the next.
+
+A worker ends with the main process however that ends: on Linux the kernel kills it when its
+parent (the forkserver, which itself exits when the main process is gone) dies, and a watchdog
+thread in every worker checks that the main process still exists, for a kill -9 or a crash.
+Workers ignore Ctrl-C: the terminal sends it to the whole process group, and the main process
+decides what an interruption stops (it terminates the workers).
+"""
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import multiprocessing
+import os
+import signal
+import threading
+import time
+from collections import deque
+from multiprocessing.connection import wait
+from typing import Callable, Iterable, Iterator
+
+_PR_SET_PDEATHSIG = 1
+WATCHDOG_PERIOD = 0.5      # s between the worker's checks that the main process is alive
+
+
+class WorkerDied(RuntimeError):
+    """The worker process running a task ended before it answered."""
+
+
+def _end_with(main_pid: int) -> None:
+    """Make this worker end when the main process does."""
+    try:                      # Linux: SIGKILL when the parent (forkserver) goes
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+
+    def watch():
+        while True:
+            time.sleep(WATCHDOG_PERIOD)
+            try:
+                os.kill(main_pid, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:
+                pass
+
+    threading.Thread(target=watch, name="sewfmu-watchdog", daemon=True).start()
+
+
+def _serve(conn, main_pid: int) -> None:
+    """A worker's life: run tasks from the pipe until told to stop or the pipe closes."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _end_with(main_pid)
+    while True:
+        try:
+            task = conn.recv()
+        except (EOFError, OSError):
+            return
+        if task is None:
+            return
+        func, args = task
+        try:
+            answer = ("ok", func(*args))
+        except Exception as err:          # the task's own failure, reported as such
+            answer = ("error", f"{type(err).__name__}: {err}")
+        conn.send(answer)
+
+
+def describe_exit(exitcode: int | None) -> str:
+    if exitcode is None:
+        return "worker process vanished"
+    if exitcode < 0:
+        name = signal.Signals(-exitcode).name if -exitcode in signal.Signals._value2member_map_ \
+            else f"signal {-exitcode}"
+        hint = " (as the out-of-memory killer does)" if -exitcode == signal.SIGKILL else ""
+        return f"worker process killed by {name}{hint}"
+    return f"worker process exited with status {exitcode}"
+
+
+class _Worker:
+    def __init__(self, context, main_pid: int):
+        self.conn, child = context.Pipe()
+        self.process = context.Process(target=_serve, args=(child, main_pid), daemon=True)
+        self.process.start()
+        child.close()
+        self.task = None
+
+    def give(self, task) -> None:
+        self.task = task
+        self.conn.send((task[1], task[2]))
+
+    def stop(self, timeout: float = 2.0) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            self.conn.close()
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join(timeout)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(timeout)
+
+
+def run_tasks(tasks: Iterable[tuple[object, Callable, tuple]], workers: int,
+              preload: list[str] = ()) -> Iterator[tuple[object, object]]:
+    """Run (key, func, args) tasks in `workers` processes; yield (key, result) as each finishes,
+    where result is func's return value, or an Exception: the task's own error as a
+    RuntimeError, or WorkerDied. When the caller stops iterating (an interruption, an error),
+    every worker is terminated."""
+    queue = deque(tasks)
+    if not queue:
+        return
+    # forkserver: workers fork from a clean server process that has imported the preload once,
+    # so they start fast and do not inherit this process's loaded FMU libraries and threads
+    context = multiprocessing.get_context("forkserver")
+    if preload:
+        context.set_forkserver_preload(list(preload))
+    main_pid = os.getpid()
+    pool = [_Worker(context, main_pid) for _ in range(min(workers, len(queue)))]
+    try:
+        for worker in pool:
+            worker.give(queue.popleft())
+        while any(w.task is not None for w in pool):
+            busy = [w for w in pool if w.task is not None]
+            wait([w.conn for w in busy] + [w.process.sentinel for w in busy])
+            for i, worker in enumerate(pool):
+                if worker.task is None:
+                    continue
+                answer = _answer(worker)
+                if answer is None:
+                    continue                         # still working
+                key = worker.task[0]
+                worker.task = None
+                if isinstance(answer, WorkerDied):   # replace it, the others go on
+                    worker.stop()
+                    worker = pool[i] = _Worker(context, main_pid)
+                if queue:
+                    worker.give(queue.popleft())
+                yield key, answer
+    finally:
+        for worker in pool:
+            worker.stop()
+
+
+def _answer(worker: _Worker):
+    """The worker's answer if it has one, WorkerDied if it died without one, else None."""
+    alive = worker.process.is_alive()         # asked first: an answer sent before dying counts
+    try:
+        if worker.conn.poll():
+            status, value = worker.conn.recv()
+            return value if status == "ok" else RuntimeError(value)
+    except (EOFError, OSError):
+        alive = False                         # the pipe broke: the process is gone
+    if alive:
+        return None
+    worker.process.join(5)
+    return WorkerDied(describe_exit(worker.process.exitcode))
