@@ -243,8 +243,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt as err:
         status = err.exit_status if isinstance(err, Interrupted) else 130
         name = err.args[0] if isinstance(err, Interrupted) else "SIGINT"
-        print(f"sewfmu: interrupted ({name}); the interrupted run wrote no results",
-              file=sys.stderr)
+        kept = ("the points finished so far are kept: the same command resumes"
+                if args.command == "sweep" else "nothing of the interrupted run was written")
+        print(f"sewfmu: interrupted ({name}); {kept}", file=sys.stderr)
         return status
     except BrokenPipeError:
         # the reader went away (`sewfmu list | head -1`): stop quietly, as other tools do

@@ -68,6 +68,8 @@ def _serve(conn, main_pid: int) -> None:
             answer = ("ok", func(*args))
         except Exception as err:          # the task's own failure, reported as such
             answer = ("error", f"{type(err).__name__}: {err}")
+        except KeyboardInterrupt:         # SIGTERM from the main process (see interrupt.py)
+            return
         conn.send(answer)
 
 

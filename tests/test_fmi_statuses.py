@@ -2,7 +2,6 @@
 naming the cause and leave the instance usable (state restore, terminate, free); calls out of the
 standard's order are refused the same way; a step of any length is taken or refused quickly; two
 threads keep stepping while one is refused; instantiate/free does not grow sys.path or memory."""
-import gc
 import json
 import math
 import os
@@ -127,7 +126,7 @@ def test_extreme_but_valid_parameters_are_refused_quickly_at_the_default_step(fm
 # --- threads -------------------------------------------------------------------------------------
 def test_two_threads_keep_stepping_while_one_is_refused_a_bad_input(fmu_paths):
     """pythonfmu keeps the interpreter lock after fmi2Fatal; a Discard must leave it free."""
-    done, errors = {}, []
+    done = {}
 
     def run(name, bad):
         host = Host(fmu_paths["PunchContact"], name)
