@@ -98,6 +98,8 @@ def cmd_sweep(args) -> None:
     for row in failed:
         values = ",".join(label_of(name, row[name]) for name, _ in points[0].values)
         print(f"  failed: {values}: {row['error']}")
+    if rows and len(failed) == len(rows):
+        raise ScenarioError(f"every point of the sweep failed (see {out}/sweep.csv)")
     if args.plot and scenario.analysis:
         swept = [name for name, _ in points[0].values]
         figures = [f for f in getattr(analyses.module(scenario.analysis), "FIGURES", ())
