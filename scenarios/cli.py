@@ -52,7 +52,10 @@ def cmd_run(args) -> None:
         if args.set:
             raise ScenarioError(f"--set: the study {args.scenario} takes no settings")
         out = Path(args.out) if args.out else Path("results") / args.scenario
-        summary = run_study(args.scenario, out, plot=args.plot)
+        if args.animate:
+            raise ScenarioError(f"--animate: the study {args.scenario} is not a run of a "
+                                f"mechanism; run a scenario to see one move")
+        summary = run_study(args.scenario, out, plot=args.plot, report=args.report)
         print(f"{args.scenario}: results in {out}/")
         print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
         return
@@ -62,7 +65,8 @@ def cmd_run(args) -> None:
     out = Path(args.out) if args.out else Path("results") / scenario.name
     progress = TerminalProgress(scenario.name)
     try:
-        summary = run_scenario(scenario, out, plot=args.plot, progress=progress)
+        summary = run_scenario(scenario, out, plot=args.plot, progress=progress,
+                               animate=args.animate, report=args.report)
     finally:
         progress.close()
     print(f"{scenario.name}: results in {out}/")
@@ -100,11 +104,16 @@ def cmd_sweep(args) -> None:
         print(f"  failed: {values}: {row['error']}")
     if rows and len(failed) == len(rows):
         raise ScenarioError(f"every point of the sweep failed (see {out}/sweep.csv)")
-    if args.plot and scenario.analysis:
-        swept = [name for name, _ in points[0].values]
+    swept = [name for name, _ in points[0].values]
+    picture = out / f"{scenario.name}_sweep.png"
+    if (args.plot or args.report) and scenario.analysis:
         figures = [f for f in getattr(analyses.module(scenario.analysis), "FIGURES", ())
                    if f != "n_contacts"]
-        plot_table(rows, swept, figures, out / f"{scenario.name}_sweep.png", scenario.description)
+        plot_table(rows, swept, figures, picture, scenario.description)
+    if args.report:
+        from .report import sweep_report
+        sweep_report(out / "report.html", scenario, rows, swept,
+                     picture if scenario.analysis else None)
 
 
 def cmd_export_ssp(args) -> None:
@@ -196,6 +205,11 @@ def main(argv=None) -> int:
         if name == "run":
             p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
             p.add_argument("--plot", action="store_true", help="write PNG figures")
+            p.add_argument("--animate", action="store_true",
+                           help="an animated GIF of the mechanism moving (last revolution)")
+            p.add_argument("--report", action="store_true",
+                           help="report.html: one self-contained page with figures, plots, "
+                                "the animation and what was run")
     p = sub.add_parser("export-ssp", help="the scenario as an SSP 1.0 archive for other tools")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
     p.add_argument("-o", "--output", required=True, help="the .ssp file to write")
@@ -231,6 +245,8 @@ def main(argv=None) -> int:
                                  "interrupted sweep into the same folder resumes")
     p.add_argument("--results", action="store_true", help="also keep each point's results.csv")
     p.add_argument("--plot", action="store_true", help="plot the figures against the parameters")
+    p.add_argument("--report", action="store_true",
+                   help="report.html: what was run, the table of points and the plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sweep)
     for stream in (sys.stdout, sys.stderr):

@@ -59,9 +59,9 @@ STUDIES = {
 }
 
 
-def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
+def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:
     """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
-    and, with plot, NAME.png; return the headline figures."""
+    and, with plot, NAME.png; with report, report.html; return the headline figures."""
     study = STUDIES[name]
     module = analyses.module(study.module)
     data = getattr(module, study.compute)()
@@ -69,8 +69,12 @@ def run_study(name: str, out_dir: Path, plot: bool = False) -> dict:
     with replacing(out_dir) as staging:
         write_json(data, staging / "study.json")
         write_json(headline, staging / "summary.json")
-        if plot:
+        if plot or report:
             getattr(module, study.plot)(data, staging / f"{name}.png")
+        if report:
+            from .report import study_report
+            study_report(staging / "report.html", name, study.description, headline,
+                         staging / f"{name}.png")
     return headline
 
 
@@ -159,36 +163,65 @@ def _number(text: str) -> float | int:
 
 
 def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
-                 fmu_dir: Path | None = None, progress=None) -> dict:
+                 fmu_dir: Path | None = None, progress=None, animate: bool = False,
+                 report: bool = False) -> dict:
     """Run (each variant of) a scenario into out_dir; return the summary written there.
 
     Every run of the scenario is done before out_dir is touched, and out_dir is then replaced
     whole (outputs.replacing): a failed or interrupted run leaves the previous results as they
-    were. `progress(label, done, total)` hears of each run's steps."""
+    were. `progress(label, done, total)` hears of each run's steps. `animate` adds a GIF of each
+    run of a mechanism; `report` a self-contained report.html (with the plots, the animations
+    and, for the punch drive, the comparison with the monolithic solution)."""
+    from . import animations
+
     runs = []
     for label, sc in variants(scenario):
         paths = fmus_for(sc, fmu_dir)
-        report = None if progress is None else \
+        report_steps = None if progress is None else \
             (lambda done, total, label=label: progress(label, done, total))
-        result = run(sc, paths, report)
+        result = run(sc, paths, report_steps)
         runs.append((label, result, {**summarize(result), "provenance": provenance(sc, paths)}))
     if scenario.compare:
         summary = {"scenario": scenario.name, "compare": scenario.compare["parameter"],
                    "runs": {label: s for label, _, s in runs}}
     else:
         summary = runs[0][2]
+    against_monolithic = {}
+    if report and scenario.analysis == "punch":
+        for label, result, own in runs:
+            against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0])
     with replacing(out_dir) as staging:
+        pictures = []
         for label, result, own in runs:
             where = staging / label if label else staging
             write_csv(result, where / "results.csv")
             write_json(own, where / "summary.json")
+            if (animate or report) and animations.can_animate(scenario):
+                gif = where / f"{scenario.name}.gif"
+                animations.animate(result, gif)
+                pictures.append((f"the mechanism moving{', ' + label if label else ''} "
+                                 f"(last revolution, recorded run)", gif))
         if scenario.compare:
             write_json(summary, staging / "summary.json")
-        if plot and scenario.analysis:
+        if (plot or report) and scenario.analysis:
             curves = [(label or scenario.name, result) for label, result, _ in runs]
-            analyses.module(scenario.analysis).plot(curves, staging / f"{scenario.name}.png",
-                                                    scenario.description)
+            png = staging / f"{scenario.name}.png"
+            analyses.module(scenario.analysis).plot(curves, png, scenario.description)
+            pictures.insert(0, ("key curves of the last revolution", png))
+        if report:
+            from .report import run_report
+            run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
     return summary
+
+
+def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, object, object]]:
+    """(figure, co-simulation, monolithic, difference) for every key figure of the punch."""
+    rows = []
+    for key in analyses.module("punch").FIGURES:
+        a, b = cosim.get(key), monolithic.get(key)
+        diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
+        rows.append((key, a, b, diff))
+    return rows
 
 
 def monolithic_summary(scenario: Scenario) -> tuple[dict, float]:
@@ -214,13 +247,8 @@ def monolithic_summary(scenario: Scenario) -> tuple[dict, float]:
 def compare(scenario: Scenario, fmu_dir: Path | None = None) -> list[tuple[str, object, object, object]]:
     """Rows (figure, co-simulation, reference, difference), plus the wall times."""
     result = simulate(scenario, fmu_dir)
-    cosim = summarize(result)
     ref, ref_wall = monolithic_summary(scenario)
-    rows = []
-    for key in analyses.module("punch").FIGURES:
-        a, b = cosim.get(key), ref.get(key)
-        diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
-        rows.append((key, a, b, diff))
+    rows = comparison_rows(summarize(result), ref)
     rows.append(("wall_time_s", round(result.wall_time, 3), round(ref_wall, 3), None))
     return rows
 
