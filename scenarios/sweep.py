@@ -311,7 +311,8 @@ def plot_table(rows: list[dict], swept: list[str], figures: list[str], path: Pat
                         label=", ".join(f"{o.split('.')[-1]}={g:g}" for o, g in zip(others, group)))
             ax.set(xlabel=param if i == len(figures) - 1 else "", ylabel=figure if j == 0 else "")
             ax.grid(alpha=0.3)
-        axes[0][j].legend(fontsize=6, ncol=1, loc="best")
+        if axes[0][j].get_legend_handles_labels()[0]:      # one swept parameter: no legend
+            axes[0][j].legend(fontsize=6, ncol=1, loc="best")
     failed = len(rows) - len(ok)
     fig.suptitle("\n".join(textwrap.wrap(title + (f" ({failed} points failed)" if failed else ""),
                                          100)), fontsize=10)

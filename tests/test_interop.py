@@ -135,3 +135,12 @@ def test_references_work_from_a_plain_install_in_any_folder(tmp_path):
                           env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "all 7 FMUs match their references" in proc.stdout
+    # every package of the source tree is installed (a package missing from pyproject's list
+    # would import here from nowhere)
+    packages = sorted(str(p.parent.relative_to(repo)).replace("/", ".")
+                      for top in ("components", "scenarios")
+                      for p in (repo / top).rglob("__init__.py"))
+    installed = sorted(str(p.parent.relative_to(target)).replace("/", ".")
+                       for top in ("components", "scenarios")
+                       for p in (target / top).rglob("__init__.py"))
+    assert installed == packages
