@@ -3,7 +3,6 @@ slider at the recorded ξ, the punch at its recorded height y over the fabric, s
 them, and the fabric's pressing force F2 as a bar."""
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
