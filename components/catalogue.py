@@ -4,6 +4,8 @@ FMUS: dict[str, tuple[str, str]] = {
     "MainShaft": ("shaft_fmu", "MainShaftSlave"),
     "PunchLinkage": ("punch_fmu", "PunchLinkageSlave"),
     "PunchContact": ("punch_fmu", "PunchContactSlave"),
+    "PunchBody": ("punch_fmu", "PunchBodySlave"),
+    "Fabric": ("punch_fmu", "FabricSlave"),
     "TakeupLinkage": ("takeup_fmu", "TakeupLinkageSlave"),
     "FeedLinkage": ("feed_fmu", "FeedLinkageSlave"),
     "CarriageDrive": ("carriage_fmu", "CarriageDriveSlave"),

@@ -111,10 +111,16 @@ class _Held:
 
 
 class PunchContact:
-    """The punch body's dynamics with exact piecewise integration and located switches."""
+    """The punch body's dynamics with exact piecewise integration and located switches.
+
+    An external force on the punch, e(τ) = e0 + e1·τ within a step (upward positive, like F2),
+    is where a fabric outside the model acts (PunchBody, split at the fabric); it is 0 here."""
 
     def __init__(self, params: PunchContactParams = PunchContactParams()):
         validate(params)
+        self._set_up(params)
+
+    def _set_up(self, params: PunchContactParams) -> None:
         self.p = params
         stiffest = params.c1 + params.c2 + params.c3
         self.shortest_period = 2.0 * math.pi * math.sqrt(params.m / stiffest)
@@ -122,20 +128,22 @@ class PunchContact:
         self.has_stop = bool(params.compression_only) and params.F30 > 0.0
 
     # --- state at the setup position ---------------------------------------------------------
-    def initial_state(self, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchState:
+    def initial_state(self, xi: float, xi_dot: float, xi_ddot: float = 0.0,
+                      ext: float = 0.0) -> PunchState:
         """At rest on the excitation (Delta = 0), with the switches consistent with that state."""
         contact, spring_on = self._consistent_flags(xi, 0.0, xi, xi_dot)
-        held = self._sticks(xi, 0.0, xi, xi_dot, xi_ddot, contact, spring_on)
+        held = self._sticks(xi, 0.0, xi, xi_dot, xi_ddot, contact, spring_on, ext)
         # held, the punch moves with the slider from the start (xi' is small then, by _sticks)
         return PunchState(xi, xi_dot if held else 0.0, contact, spring_on or held, held=held)
 
     # --- forces ------------------------------------------------------------------------------
-    def outputs(self, s: PunchState, xi: float, xi_dot: float, xi_ddot: float = 0.0) -> PunchOutputs:
+    def outputs(self, s: PunchState, xi: float, xi_dot: float, xi_ddot: float = 0.0,
+                ext: float = 0.0) -> PunchOutputs:
         p = self.p
         f1, f2 = self._spring6_and_fabric(s.y, s.y_dot, s.contact)
         delta = xi - s.y
         if s.held:                   # the stop carries whatever keeps the punch on the slider
-            f3 = self._stop_force(s.y, s.y_dot, xi_ddot, s.contact)
+            f3 = self._stop_force(s.y, s.y_dot, xi_ddot, s.contact, ext)
             return PunchOutputs(s.y, s.y_dot, xi_ddot, f1, f2, f3, delta, s.contact,
                                 max(s.F2_max, f2))
         f3 = p.F30 + p.c3 * delta + p.b3 * (xi_dot - s.y_dot)
@@ -143,7 +151,7 @@ class PunchContact:
             f3 = 0.0
         elif p.compression_only:
             f3 = max(0.0, f3)
-        a = (-f1 + f2 + f3) / p.m - GRAVITY
+        a = (-f1 + f2 + f3 + ext) / p.m - GRAVITY
         return PunchOutputs(s.y, s.y_dot, a, f1, f2, f3, delta, s.contact, max(s.F2_max, f2))
 
     def _spring6_and_fabric(self, y, v, contact) -> tuple[float, float]:
@@ -152,14 +160,14 @@ class PunchContact:
         f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
         return p.F10 + p.c1 * y + p.b1 * v, f2
 
-    def _stop_force(self, y, v, xi_ddot, contact) -> float:
+    def _stop_force(self, y, v, xi_ddot, contact, ext=0.0) -> float:
         """Force of spring 11's stop that makes the punch move with the slider (y'' = xi'')."""
         f1, f2 = self._spring6_and_fabric(y, v, contact)
-        return self.p.m * (xi_ddot + GRAVITY) + f1 - f2
+        return self.p.m * (xi_ddot + GRAVITY) + f1 - f2 - ext
 
-    def _compresses_on_release(self, y, v, xi_ddot, contact) -> bool:
+    def _compresses_on_release(self, y, v, xi_ddot, contact, ext=0.0) -> bool:
         """Leaving the stop: into spring 11 (stop force above F30) or off the slider (below 0)."""
-        return self._stop_force(y, v, xi_ddot, contact) > self.p.F30
+        return self._stop_force(y, v, xi_ddot, contact, ext) > self.p.F30
 
     # --- switching functions: negative while the current flag is consistent -------------------
     def _contact_g(self, y, v):
@@ -172,9 +180,9 @@ class PunchContact:
         delta = xi - y
         return max(-delta, -(p.F30 + p.c3 * delta + p.b3 * (xi_dot - v)))
 
-    def _release_g(self, y, v, xi_ddot, contact):
+    def _release_g(self, y, v, xi_ddot, contact, ext=0.0):
         """< 0 while the stop can hold the punch: stop force in [0, F30]."""
-        f = self._stop_force(y, v, xi_ddot, contact)
+        f = self._stop_force(y, v, xi_ddot, contact, ext)
         return max(f - self.p.F30, -f)
 
     def _consistent_flags(self, y, v, xi, xi_dot) -> tuple[bool, bool]:
@@ -183,7 +191,7 @@ class PunchContact:
         spring_on = self._spring_g(y, v, xi, xi_dot) < 0.0 if self.p.compression_only else True
         return contact, spring_on
 
-    def _sticks(self, y, v, xi, xi_dot, xi_ddot, contact, spring_on) -> bool:
+    def _sticks(self, y, v, xi, xi_dot, xi_ddot, contact, spring_on, ext=0.0) -> bool:
         """Whether the punch, at the stop of spring 11, comes to rest on it: the stop can hold
         it (stop force in [0, F30]) and the excursion the current mode would start (ballistic:
         2·|Delta'| / |Delta''|) is shorter than the switch search resolves. The relative kinetic
@@ -194,24 +202,26 @@ class PunchContact:
         f3_star = p.F30 + p.c3 * (xi - y) + p.b3 * (xi_dot - v)
         if f3_star < 0.5 * p.F30:           # a zero of F3* inside the travel, not the stop
             return False
-        if not 0.0 <= self._stop_force(xi, xi_dot, xi_ddot, contact) <= p.F30:
+        if not 0.0 <= self._stop_force(xi, xi_dot, xi_ddot, contact, ext) <= p.F30:
             return False
         f1, f2 = self._spring6_and_fabric(y, v, contact)
-        a = (-f1 + f2 + (f3_star if spring_on else 0.0)) / p.m - GRAVITY
+        a = (-f1 + f2 + (f3_star if spring_on else 0.0) + ext) / p.m - GRAVITY
         excursion_speed = abs(xi_dot - v)
         return 2.0 * excursion_speed <= abs(xi_ddot - a) * self.shortest_period / _SAMPLES_PER_PERIOD
 
     # --- one communication step ----------------------------------------------------------------
-    def step(self, s: PunchState, x0: float, x1: float, x2: float, h: float) -> PunchState:
-        """Advance by h under the excitation xi(τ) = x0 + x1·τ + x2·τ², τ in [0, h]."""
+    def step(self, s: PunchState, x0: float, x1: float, x2: float, h: float,
+             e0: float = 0.0, e1: float = 0.0) -> PunchState:
+        """Advance by h under the excitation xi(τ) = x0 + x1·τ + x2·τ², τ in [0, h], and the
+        external force e0 + e1·τ."""
         y, v, contact, spring_on, held = s.y, s.y_dot, s.contact, s.spring_on, s.held
         landings = s.landings
         if held:
             # the punch rides on the slider: it starts this step where the new inputs put it,
             # and leaves the stop at once if the stop cannot hold it under them
             y, v = x0, x1
-            if self._release_g(y, v, 2.0 * x2, contact) > 0.0:
-                held, spring_on = False, self._compresses_on_release(y, v, 2.0 * x2, contact)
+            if self._release_g(y, v, 2.0 * x2, contact, e0) > 0.0:
+                held, spring_on = False, self._compresses_on_release(y, v, 2.0 * x2, contact, e0)
         elif self.p.compression_only:
             # new inputs may have moved the slider: re-decide whether spring 11 bears
             spring_on = self._spring_g(y, v, x0, x1) < 0.0
@@ -229,8 +239,8 @@ class PunchContact:
         # a search sub-interval, so the count scales with them
         budget = _MAX_SWITCHES_PER_STEP + 4 * intervals
         for _ in range(budget):
-            piece = self._piece(y, v, contact, spring_on, held, x0, x1, x2, t0)
-            event = self._first_switch(piece, contact, spring_on, held, x0, x1, x2, t0, h)
+            piece = self._piece(y, v, contact, spring_on, held, x0, x1, x2, t0, e0, e1)
+            event = self._first_switch(piece, contact, spring_on, held, x0, x1, x2, t0, h, e0, e1)
             t_end = h if event is None else event[0]
             if contact:
                 f2_max = max(f2_max, self._largest_F2(piece, t_end - t0))
@@ -246,11 +256,11 @@ class PunchContact:
                 landings += contact
             elif held:
                 held = False
-                spring_on = self._compresses_on_release(y, v, xi_ddot, contact)
+                spring_on = self._compresses_on_release(y, v, xi_ddot, contact, e0 + e1 * t0)
             else:
                 spring_on = not spring_on
                 xi, xi_dot = x0 + t0 * (x1 + t0 * x2), x1 + 2.0 * t0 * x2
-                if self._sticks(y, v, xi, xi_dot, xi_ddot, contact, spring_on):
+                if self._sticks(y, v, xi, xi_dot, xi_ddot, contact, spring_on, e0 + e1 * t0):
                     held, spring_on, y, v = True, True, xi, xi_dot
         raise ZenoError(f"more than {budget} contact switches within one step of {h:g} s "
                         f"(y = {y:.6g} m): the contact chatters; check c2, b2, c3, b3")
@@ -279,7 +289,7 @@ class PunchContact:
             best = max(best, force(0.5 * (lo + hi)))
         return max(best, 0.0)
 
-    def _piece(self, y, v, contact, spring_on, held, x0, x1, x2, t0):
+    def _piece(self, y, v, contact, spring_on, held, x0, x1, x2, t0, e0=0.0, e1=0.0):
         """The exact solution from time t0 of the step, in the current mode."""
         p = self.p
         b, c = p.b1, p.c1
@@ -289,7 +299,7 @@ class PunchContact:
         a2 = x2
         if held:
             return _Held(a0, a1, a2)
-        f0, f1, f2 = -p.F10 - p.m * GRAVITY, 0.0, 0.0
+        f0, f1, f2 = -p.F10 - p.m * GRAVITY + e0 + e1 * t0, e1, 0.0
         if contact:
             b += p.b2
             c += p.c2
@@ -301,13 +311,14 @@ class PunchContact:
             f2 += p.c3 * a2
         return DampedOscillator(p.m, b, c, f0, f1, f2, y, v)
 
-    def _switch_functions(self, piece, tau, contact, spring_on, held, x0, x1, x2, t_abs):
+    def _switch_functions(self, piece, tau, contact, spring_on, held, x0, x1, x2, t_abs,
+                          e0=0.0, e1=0.0):
         """Switching functions at piece time tau, signed so that > 0 means 'flip this flag'."""
         y, v = piece.state(tau)
         g = self._contact_g(y, v)
         out = [("contact", g if contact else -g)]
         if held:
-            out.append(("spring", self._release_g(y, v, 2.0 * x2, contact)))
+            out.append(("spring", self._release_g(y, v, 2.0 * x2, contact, e0 + e1 * t_abs)))
         elif self.p.compression_only:
             xi = x0 + t_abs * (x1 + t_abs * x2)
             xi_dot = x1 + 2.0 * t_abs * x2
@@ -315,12 +326,13 @@ class PunchContact:
             out.append(("spring", gs if spring_on else -gs))
         return out
 
-    def _first_switch(self, piece, contact, spring_on, held, x0, x1, x2, t0, h):
+    def _first_switch(self, piece, contact, spring_on, held, x0, x1, x2, t0, h, e0=0.0, e1=0.0):
         """(time in the step, which flag) of the first switch in (t0, h], or None."""
         n_sub = max(1, math.ceil((h - t0) / (self.shortest_period / _SAMPLES_PER_PERIOD)))
 
         def funcs(t):
-            return self._switch_functions(piece, t - t0, contact, spring_on, held, x0, x1, x2, t)
+            return self._switch_functions(piece, t - t0, contact, spring_on, held, x0, x1, x2, t,
+                                          e0, e1)
 
         t_prev = t0
         for k in range(1, n_sub + 1):

@@ -1,4 +1,5 @@
-"""FMUs PunchLinkage and PunchContact: the punch drive of the ultrasonic sewing machine."""
+"""FMUs of the punch drive of the ultrasonic sewing machine: PunchLinkage and PunchContact, and the
+punch split at the fabric, PunchBody and Fabric."""
 from __future__ import annotations
 
 import math
@@ -6,6 +7,7 @@ import math
 from .fmi_base import LinkageSlave, Port, SewSlave, fields_of
 from .punch_contact import PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
+from .punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams
 
 SETUP_SPEED = 100.0         # rad/s: the punch drive's default shaft speed (the paper's first case)
 
@@ -87,3 +89,94 @@ class PunchContactSlave(SewSlave):
 
     def restore_internal(self, saved):
         self._state = PunchState(**saved) if saved else None
+
+
+class PunchBodySlave(PunchContactSlave):
+    """Punch body without the fabric: driven by the linkage through spring 11, pressed by the
+    fabric's force F2 (an input)."""
+
+    model_name = "PunchBody"
+    params_class = PunchBodyParams
+    model_class = PunchBody
+    inputs = (
+        *PunchContactSlave.inputs,
+        Port("F2", "N", "force of the fabric on the punch (>= 0)"),
+        Port("F2_dot", "N/s", "its rate: F2 is extrapolated linearly within a step"),
+    )
+    taylor_inputs = (("xi", "xi_dot", "xi_ddot"), ("F2", "F2_dot"))
+    outputs = tuple(p for p in PunchContactSlave.outputs
+                    if p.name not in ("F2", "contact", "F2_max"))
+    # y'' follows the fabric's force at once
+    outputs = tuple(Port(p.name, p.unit, p.description, feedthrough=True) if p.name == "y_ddot"
+                    else p for p in outputs)
+
+    def initialize(self, model):
+        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"],
+                                          self._inputs["xi_ddot"], self._inputs["F2"])
+
+    def advance(self, model, t, h):
+        u = self.extrapolated_inputs(self._elapsed)
+        self._state = model.step(self._state_now(), u["xi"], u["xi_dot"], 0.5 * u["xi_ddot"], h,
+                                 u["F2"], u["F2_dot"])
+
+    def current_outputs(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"], u["xi_ddot"], u["F2"])
+        return fields_of(o)
+
+
+class FabricSlave(SewSlave):
+    """The welded material: elastic-dissipative, unilateral, non-retaining contact with the punch."""
+
+    model_name = "Fabric"
+    params_class = FabricParams
+    model_class = Fabric
+    # the punch at the setup position: at rest at the top, accelerated down by spring 6 (the
+    # default PunchBody's initial y''); run alone, the inputs extrapolate that fall, and the
+    # punch lands after 4.4 ms and presses into the fabric
+    inputs = (
+        Port("y", "m", "punch height above the fabric (< 0: pressing into it)", start=4.5e-3),
+        Port("y_dot", "m/s", "punch velocity"),
+        Port("y_ddot", "m/s2", "punch acceleration: the punch's motion is extrapolated within a "
+                               "step to locate contact inside it",
+             start=-(20.0 + 2000.0 * 4.5e-3) / 0.063 - 9.81),
+    )
+    taylor_inputs = (("y", "y_dot", "y_ddot"),)
+    experiment = (0.01, 1e-4)
+    outputs = (
+        Port("F2", "N", "force of the fabric on the punch (>= 0)", feedthrough=True),
+        Port("F2_dot", "N/s", "rate of F2 (0 out of contact)", feedthrough=True),
+        Port("contact", "1", "the punch presses on the fabric (F2 > 0)", kind="Boolean",
+             feedthrough=True),
+        Port("F2_max", "N", "largest F2 during the last communication step (the impact at "
+                            "landing falls between communication points)", feedthrough=True),
+        Port("t_switch", "s", "time of the last contact switch (on or off) located inside the "
+                              "last step; -1 if the last step had none"),
+    )
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._F2_max = 0.0
+        self._t_switch = -1.0
+
+    def initialize(self, model):
+        self._F2_max, self._t_switch = 0.0, -1.0
+
+    def advance(self, model, t, h):
+        u = self.extrapolated_inputs(self._elapsed)
+        seen = model.step(u["y"], u["y_dot"], u["y_ddot"], h)
+        self._F2_max = seen.F2_max
+        self._t_switch = t + seen.switches[-1][0] if seen.switches else -1.0
+
+    def current_outputs(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        fabric = self.model()
+        f2 = fabric.force(u["y"], u["y_dot"])
+        return {"F2": f2, "F2_dot": fabric.force_rate(u["y"], u["y_dot"], u["y_ddot"]),
+                "contact": f2 > 0.0, "F2_max": max(self._F2_max, f2), "t_switch": self._t_switch}
+
+    def save_internal(self):
+        return {"F2_max": self._F2_max, "t_switch": self._t_switch}
+
+    def restore_internal(self, saved):
+        self._F2_max, self._t_switch = saved["F2_max"], saved["t_switch"]

@@ -64,6 +64,36 @@ class RunResult:
 # the FMU's library stays loaded (see Master._free), so it is loaded from one place only.
 _EXTRACTED: dict[tuple, tuple[str, object]] = {}
 
+# Every FMU library this process loaded (one dlopen per instance), released at exit while the
+# interpreter is still alive. pythonfmu 0.7.0 keeps its interpreter state in a static
+# shared_ptr, which the C++ exit handlers destroy, and which the library's unload function
+# (finalizePythonInterpreter) releases once more when the process exits after them: a write
+# into freed memory that aborts the process at exit ("corrupted double-linked list") or not,
+# depending on the heap's layout (seen with four FMU types and scipy loaded). Called first, at
+# Python's exit, that function releases the state while all is alive and leaves the static empty,
+# so neither later step has anything to free; then the library is unloaded.
+_LIBRARIES: list = []
+
+
+def release_at_exit(fmu: FMU2Slave) -> None:
+    """Have the library of an fmpy FMU object released at Python's exit (see above)."""
+    _LIBRARIES.append(fmu.dll)
+
+
+@atexit.register
+def _release_libraries() -> None:
+    from fmpy import freeLibrary
+
+    while _LIBRARIES:
+        library = _LIBRARIES.pop()
+        try:
+            release_state = getattr(library, "finalizePythonInterpreter", None)
+            if release_state is not None:
+                release_state()
+            freeLibrary(library._handle)
+        except Exception:           # noqa: BLE001 - at exit, nothing to report to
+            pass
+
 
 def extracted_fmu(path: Path) -> tuple[str, object]:
     """(unzip folder, model description) of an FMU file, extracted once per process."""
@@ -159,6 +189,7 @@ class FmuInstance:
         self.variables = {v.name: v for v in md.modelVariables}
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        release_at_exit(self.fmu)
         self.log = log
         self.instantiated = False
         self.failed = False          # a call returned fmi2Fatal: make no further calls
@@ -397,7 +428,11 @@ class Master:
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))
         check_parameters(sc, self.fmu_paths)
-        return _dependency_order(list(by_name.values()), sc)
+        order, self.in_loops = _dependency_order(list(by_name.values()))
+        # inputs and outputs settle in one pass along a chain; around a feedback loop each pass
+        # carries a change one link further
+        self.passes = 1 + len(self.in_loops)
+        return order
 
     def _plan(self, units: list[FmuInstance]) -> list[str]:
         """Decide which outputs are read each step; return the recorded column names."""
@@ -475,9 +510,15 @@ class JacobiMaster(Master):
     def exchange_and_step(self, units, t, h):
         for unit in units:
             unit.do_step(t, h)
-        for unit in units:            # dependency order: feedthrough settles in one pass
-            unit.pull_inputs()
-            unit.read_outputs()
+        self.exchange(units)
+
+    def exchange(self, units) -> None:
+        """Every input from its source's outputs now (dependency order: along a chain
+        feedthrough settles in one pass; around a loop in one pass per unit on it)."""
+        for _ in range(self.passes):
+            for unit in units:
+                unit.pull_inputs()
+                unit.read_outputs()
 
 
 class GaussSeidelMaster(Master):
@@ -493,9 +534,10 @@ class GaussSeidelMaster(Master):
 MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster)}
 
 
-def _dependency_order(units: list[FmuInstance], sc: Scenario) -> list[FmuInstance]:
-    """Sources before the units they feed (a cycle keeps the scenario's order within it)."""
-    order, placed = [], set()
+def _dependency_order(units: list[FmuInstance]) -> tuple[list[FmuInstance], list[FmuInstance]]:
+    """Sources before the units they feed (a cycle keeps the scenario's order within it), and
+    the units that lie on a feedback loop."""
+    order, placed, in_loops = [], set(), []
     remaining = list(units)
     while remaining:
         ready = [u for u in remaining
@@ -506,7 +548,23 @@ def _dependency_order(units: list[FmuInstance], sc: Scenario) -> list[FmuInstanc
             order.append(u)
             placed.add(u.name)
             remaining.remove(u)
-    return order
+    for unit in units:
+        if _reaches(unit, unit):
+            in_loops.append(unit)
+    return order, in_loops
+
+
+def _reaches(start: FmuInstance, target: FmuInstance) -> bool:
+    """Whether a signal from `target` comes back to `start` through the connections."""
+    seen, todo = set(), [src for _, src, _ in start.inputs]
+    while todo:
+        unit = todo.pop()
+        if unit is target:
+            return True
+        if unit.name not in seen:
+            seen.add(unit.name)
+            todo.extend(src for _, src, _ in unit.inputs)
+    return False
 
 
 def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:

@@ -48,6 +48,21 @@ def _punch_inputs(t):
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}
 
 
+def _body_inputs(t):
+    """The six-bar's excitation at ω = 200 s⁻¹ and a fabric force pulse of 25 N (a half sine)
+    in the middle of each revolution."""
+    pulse = np.clip(np.sin(400.0 * t - 1.0), 0.0, None)
+    rate = np.where(pulse > 0.0, 400.0 * np.cos(400.0 * t - 1.0), 0.0)
+    return {**_punch_inputs(t), "F2": 25.0 * pulse, "F2_dot": 25.0 * rate}
+
+
+def _fabric_inputs(t):
+    """A punch oscillating 2 mm about 0.5 mm below the surface at 80 Hz: in and out of contact."""
+    w = 2 * math.pi * 80.0
+    return {"y": 2e-3 * np.cos(w * t) - 0.5e-3, "y_dot": -2e-3 * w * np.sin(w * t),
+            "y_ddot": -2e-3 * w * w * np.cos(w * t)}
+
+
 def _carriage_inputs(t):
     from components.carriage import CarriageDrive
     omega = 1600 * 2 * math.pi / 60
@@ -59,6 +74,8 @@ CASES: dict[str, Case] = {
     "MainShaft": Case(0.2, 1e-3),
     "PunchLinkage": Case(2 * math.pi / 100, 2.5e-4, _shaft(100.0)),
     "PunchContact": Case(4 * math.pi / 200, 2.5e-4, _punch_inputs),
+    "PunchBody": Case(4 * math.pi / 200, 2.5e-4, _body_inputs),
+    "Fabric": Case(0.025, 1e-4, _fabric_inputs),
     "TakeupLinkage": Case(2 * math.pi / 523.5987755982989, 2e-5, _shaft(523.5987755982989)),
     "FeedLinkage": Case(2 * math.pi / 303.5, 5e-5, _shaft(303.5)),
     "CarriageDrive": Case(2 * math.pi / 167.55160819145564, 1e-4, _shaft(167.55160819145564)),

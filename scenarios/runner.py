@@ -187,7 +187,7 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
     else:
         summary = runs[0][2]
     against_monolithic = {}
-    if report and scenario.analysis == "punch":
+    if report and scenario.analysis in ("punch", "punch_split"):
         for label, result, own in runs:
             against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0])
     with replacing(out_dir) as staging:
@@ -227,13 +227,15 @@ def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, ob
 def monolithic_summary(scenario: Scenario) -> tuple[dict, float]:
     """Key figures of the monolithic solution (the punch drive as one ODE, DOP853, tight
     tolerances) and its wall time."""
-    if scenario.analysis != "punch":
+    if scenario.analysis not in ("punch", "punch_split"):
         raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
     from . import punch_monolithic
 
     params = {role: dict(scenario.instances[name].parameters)
               for role, name in scenario.roles.items()}
+    if scenario.analysis == "punch_split":       # the same physics: body and fabric as one punch
+        params["punch"] = {**params.pop("body"), **params.pop("fabric")}
     t_end = scenario.end_time()
     omega = params["shaft"].get("omega0", 100.0)
     started = clock.perf_counter()

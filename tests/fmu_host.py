@@ -7,7 +7,7 @@ the process, and a healthy instance left unfreed can corrupt the heap at interpr
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
-from scenarios.master import extracted_fmu, LogCollector
+from scenarios.master import LogCollector, extracted_fmu, release_at_exit
 
 OPEN_HOSTS: list["Host"] = []
 
@@ -22,6 +22,7 @@ class Host:
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=unzip_dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=name)
+        release_at_exit(self.fmu)
         self._watch_calls()
         self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=True)
         OPEN_HOSTS.append(self)

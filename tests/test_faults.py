@@ -86,9 +86,14 @@ def _alive(pid: int) -> bool:
 
 def _workers_of(pid: int) -> list[int]:
     """The sweep's worker processes: children of its forkserver."""
+    def cmdline(child):
+        try:
+            return Path(f"/proc/{child}/cmdline").read_bytes()
+        except OSError:                  # it has just ended
+            return b""
+
     children = _children(pid)
-    servers = [c for c in children.get(pid, [])
-               if b"forkserver" in Path(f"/proc/{c}/cmdline").read_bytes()]
+    servers = [c for c in children.get(pid, []) if b"forkserver" in cmdline(c)]
     return [w for s in servers for w in children.get(s, []) if _alive(w)]
 
 

@@ -44,7 +44,7 @@ PUNCH = (REPO / "scenarios" / "catalogue" / "punch_drive.toml").read_text()
      ["broken.toml", "omega_0", "unknown parameter"]),
     (lambda t: t.replace("step = 2.5e-4", "step = 2.0"), ["longer than the run"]),
     (lambda t: t.replace("step = 2.5e-4", "step = -1e-4"), ["experiment.step", "positive"]),
-    (lambda t: t.replace('fmu = "PunchContact"', 'fmu = "PunchBody"'), ["unknown FMU 'PunchBody'"]),
+    (lambda t: t.replace('fmu = "PunchContact"', 'fmu = "PunchBdy"'), ["unknown FMU 'PunchBdy'"]),
     (lambda t: t.replace('fmu = "PunchContact"', 'fmu = "PunchContact"\nparameters = { mass = 1.0 }'),
      ["broken.toml", "punch.mass", "has no parameter 'mass'"]),
 ])

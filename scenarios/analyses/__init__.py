@@ -15,6 +15,8 @@ from types import ModuleType
 # analysis -> role -> the FMU type that plays it
 ROLES: dict[str, dict[str, str]] = {
     "punch": {"shaft": "MainShaft", "linkage": "PunchLinkage", "punch": "PunchContact"},
+    "punch_split": {"shaft": "MainShaft", "linkage": "PunchLinkage", "body": "PunchBody",
+                    "fabric": "Fabric"},
     "carriage": {"shaft": "MainShaft", "drive": "CarriageDrive", "carriage": "CarriageModal"},
     "feed": {"shaft": "MainShaft", "feed": "FeedLinkage"},
     "takeup": {"shaft": "MainShaft", "takeup": "TakeupLinkage"},

@@ -93,11 +93,24 @@ def _mean_between(x: np.ndarray, f: np.ndarray, a: float, b: float) -> float:
     return float(np.trapezoid(fs, xs) / (b - a))
 
 
+# the punch's signals: all from PunchContact, or, split at the fabric, from PunchBody and Fabric
+_FROM_FABRIC = ("F2", "F2_max", "contact")
+
+
+def signal(result, name: str):
+    """A punch signal of a run of punch_drive (role punch) or punch_split (roles body, fabric)."""
+    roles = result.scenario.roles
+    if "punch" in roles:
+        role = "punch"
+    else:
+        role = "fabric" if name in _FROM_FABRIC else "body"
+    return result.columns.get(f"{roles[role]}.{name}") if name == "F2_max" \
+        else column(result, role, name)
+
+
 def summary_of_run(result) -> dict:
-    punch = result.scenario.roles["punch"]
-    return summary(column(result, "shaft", "phi"), column(result, "punch", "y"),
-                   column(result, "punch", "F2"), column(result, "punch", "contact"),
-                   result.columns.get(f"{punch}.F2_max"))
+    return summary(column(result, "shaft", "phi"), signal(result, "y"), signal(result, "F2"),
+                   signal(result, "contact"), signal(result, "F2_max"))
 
 
 def summary_of_monolithic(solution) -> dict:
@@ -116,8 +129,8 @@ def plot(curves, path, title: str) -> None:
         mask = last_revolution(result)
         phi = column(result, "shaft", "phi")
         deg = np.degrees(phi[mask] - (phi[-1] - 2 * math.pi))
-        ax_y.plot(deg, column(result, "punch", "y")[mask] * 1e3, label=label)
-        ax_f.plot(deg, column(result, "punch", "F2")[mask], label=label)
+        ax_y.plot(deg, signal(result, "y")[mask] * 1e3, label=label)
+        ax_f.plot(deg, signal(result, "F2")[mask], label=label)
     ax_y.plot(deg, column(result, "linkage", "xi")[mask] * 1e3, "k:", lw=1, label="ξ (slider)")
     ax_y.axhline(0.0, color="0.6", lw=0.8)
     ax_y.set_ylabel("punch height y [mm]")

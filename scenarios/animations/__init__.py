@@ -27,7 +27,9 @@ FRAME_MS = 90                 # display time of a frame
 TRACKED = "#ff0000"           # the recorded point every animation marks
 SIZE_IN = (5.0, 4.2)          # figure size (in) and resolution: 400 x 336 pixels
 DPI = 80
-ANIMATED = ("punch", "feed", "takeup", "carriage")
+# analysis -> the module that draws its mechanism
+ANIMATED = {"punch": "punch", "punch_split": "punch", "feed": "feed", "takeup": "takeup",
+            "carriage": "carriage"}
 
 
 @dataclass
@@ -72,7 +74,7 @@ def animate(result, path: Path) -> Animation:
     if kind not in ANIMATED:
         raise analyses.RoleError(f"no animation for the {kind!r} analysis "
                                  f"(animated: {', '.join(ANIMATED)})")
-    scene = importlib.import_module(f"{__name__}.{kind}").Scene(result)
+    scene = importlib.import_module(f"{__name__}.{ANIMATED[kind]}").Scene(result)
     samples = frame_samples(analyses.column(result, "shaft", "phi"))
     fig, ax = plt.subplots(figsize=SIZE_IN, dpi=DPI)
     images, tracked = [], []

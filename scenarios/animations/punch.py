@@ -10,6 +10,7 @@ from components.parameters import with_values
 from components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
 
 from .. import analyses
+from ..analyses.punch import signal
 from . import angle_label
 
 MM = 1e3
@@ -28,8 +29,8 @@ class Scene:
         p = self.model.p
         self.phi = analyses.column(result, "shaft", "phi")
         self.xi = analyses.column(result, "linkage", "xi")
-        self.y = analyses.column(result, "punch", "y")
-        self.F2 = analyses.column(result, "punch", "F2")
+        self.y = signal(result, "y")
+        self.F2 = signal(result, "F2")
         self.x = p.x_D * MM
         # the fabric surface in the linkage's frame: the slider's top height less the lift xi0
         self.surface = (self.model.y_top - p.xi0) * MM - HOLDER

@@ -1,0 +1,3 @@
+"""The punch drive split at the fabric (PunchBody + Fabric): the same figures and plots as the
+punch drive's, read from the body (y) and the fabric (F2, contact, its peak hold)."""
+from .punch import FIGURES, plot, summary_of_monolithic, summary_of_run  # noqa: F401
