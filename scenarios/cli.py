@@ -81,10 +81,19 @@ def cmd_compare(args) -> None:
     from .runner import compare
 
     scenario = _load_with_sets(args.scenario, args.set)
-    rows = compare(scenario)
+    rows = compare(scenario, rtol=args.rtol)
     print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
           f"co-simulation vs monolithic solution")
-    _print_side_by_side(rows, "co-simulation", "monolithic")
+    if args.rtol is None:
+        _print_side_by_side(rows, "co-simulation", "monolithic")
+        return
+    loose = f"rtol {args.rtol:g}"
+    print(f"  {'figure':22s} {'co-simulation':>14s} {loose:>14s} {'tight':>14s} "
+          f"{'co-sim error':>13s} {loose + ' error':>17s}")
+    for key, a, c, b, ea, ec in rows:
+        errors = "".join(f" {_fmt(e) if e is not None else '':>13s}" for e in (ea,)) + \
+            f" {_fmt(ec) if ec is not None else '':>17s}"
+        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(c):>14s} {_fmt(b):>14s}{errors}")
 
 
 def cmd_sweep(args) -> None:
@@ -202,6 +211,9 @@ def main(argv=None) -> int:
         p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
                        help="override a parameter (or experiment.step, experiment.master, ...)")
         p.set_defaults(func=func)
+        if name == "compare":
+            p.add_argument("--rtol", type=_positive_number, help="also run the monolithic solver at this "
+                           "relative tolerance, both against a tight monolithic solution")
         if name == "run":
             p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
             p.add_argument("--plot", action="store_true", help="write PNG figures")
@@ -293,6 +305,17 @@ def explain(err: Exception, command: str) -> str:
                f"or a shorter run needs less)"
     return (f"unexpected {type(err).__name__} during `sewfmu {command}`: {err} "
             f"(a bug in sewfmu: please report it; --debug shows where)")
+
+
+def _positive_number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a relative tolerance between 0 and 1, "
+                                         f"got {text}")
+    return value
 
 
 def _whole_number(text: str) -> int:

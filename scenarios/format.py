@@ -12,7 +12,9 @@
     shaft = "shaft"                         # optional: the MainShaft instance whose turns are
                                             # counted (default: the analysis's shaft)
     step = 2.5e-4                           # communication step (s)
-    master = "jacobi"                       # or "gauss-seidel"
+    master = "jacobi"                       # or "gauss-seidel", "iterative"
+    tolerance = 1e-6                        # iterative: agreement of the exchanged values
+    acceleration = "aitken"                 # iterative: or "iqn-ils", "none"
     record_every = 1                        # optional: keep every n-th point (long runs)
 
     [instances.shaft]
@@ -43,7 +45,9 @@ from typing import Any
 
 from components.catalogue import FMUS
 
-MASTERS = ("jacobi", "gauss-seidel")
+MASTERS = ("jacobi", "gauss-seidel", "iterative")
+ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
+DEFAULT_TOLERANCE = 1e-6          # iterative master: relative agreement of the exchanged values
 
 
 class ScenarioError(ValueError):
@@ -86,6 +90,8 @@ class Scenario:
     sweep: dict[str, Any] | None = None
     record_every: int = 1             # record every n-th communication point (long runs)
     roles: dict[str, str] = field(default_factory=dict)   # the analysis's role -> instance
+    tolerance: float = DEFAULT_TOLERANCE                  # iterative master
+    acceleration: str = "aitken"                          # iterative master
     digest: str = ""                  # sha256 of the scenario file's text, as read
 
     def copy(self) -> "Scenario":
@@ -136,6 +142,15 @@ class Scenario:
                                     f"got {value!r}")
             self.master = value
             return
+        if key == "acceleration":
+            if value not in ACCELERATIONS:
+                raise ScenarioError(f"{origin} experiment.acceleration: must be one of "
+                                    f"{ACCELERATIONS}, got {value!r}")
+            self.acceleration = value
+            return
+        if key == "tolerance":
+            self.tolerance = _positive(value, f"{origin} experiment.tolerance")
+            return
         if key == "record_every":
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ScenarioError(f"{origin} experiment.record_every: must be a whole number "
@@ -144,7 +159,8 @@ class Scenario:
             return
         if key not in ("step", "stop_time", "revolutions"):
             raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
-                                f"(step, stop_time, revolutions, master, record_every)")
+                                f"(step, stop_time, revolutions, master, record_every, "
+                                f"tolerance, acceleration)")
         number = _positive(value, f"{origin} experiment.{key}")
         setattr(self, key, number)
         if key == "stop_time":
@@ -258,7 +274,8 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
     exp = _table(data, "experiment", source)
-    known_exp = {"revolutions", "stop_time", "shaft", "step", "master", "record_every"}
+    known_exp = {"revolutions", "stop_time", "shaft", "step", "master", "record_every",
+                 "tolerance", "acceleration"}
     for key in exp:
         if key not in known_exp:
             raise ScenarioError(f"{source}: unknown key experiment.{key} "
@@ -305,9 +322,9 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
-    if "record_every" in exp:
-        scenario.set_value("experiment.record_every", exp["record_every"],
-                           origin=f"{source}: experiment.record_every")
+    for key in ("record_every", "tolerance", "acceleration"):
+        if key in exp:
+            scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
     for inst_name, spec in data["instances"].items():
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,

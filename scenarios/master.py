@@ -55,6 +55,7 @@ class RunResult:
     columns: dict[str, np.ndarray]
     wall_time: float
     log: list[str] = field(default_factory=list)
+    coupling: dict = field(default_factory=dict)     # the iterative master's statistics
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -251,9 +252,13 @@ class FmuInstance:
             buf = self.in_buf
             for k, (src, idx) in enumerate(self.in_sources):
                 buf[k] = src.out_buf[idx]
-            status = self._set_real(self.component, self.in_vr, self.n_in, buf)
-            if status > 1:
-                self._check("fmi2SetReal", status)
+            self.set_inputs()
+
+    def set_inputs(self) -> None:
+        """Set every connected input to its value in in_buf."""
+        status = self._set_real(self.component, self.in_vr, self.n_in, self.in_buf)
+        if status > 1:
+            self._check("fmi2SetReal", status)
 
     def read_outputs(self) -> None:
         if self.n_out:
@@ -365,13 +370,15 @@ class Master:
     def save_state(self) -> tuple:
         """The state of every FMU and of the master: `restore_state` rolls back to it."""
         with self._reporting(self.k * self.scenario.step):
-            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.instances])
+            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.instances],
+                    [list(u.in_buf) for u in self.instances])
 
     def restore_state(self, state: tuple) -> None:
-        self.k, self._row, fmu_states = state
+        self.k, self._row, fmu_states, inputs = state
         with self._reporting(self.k * self.scenario.step):
-            for unit, fmu_state in zip(self.instances, fmu_states):
+            for unit, fmu_state, values in zip(self.instances, fmu_states, inputs):
                 unit.fmu.setFMUstate(fmu_state)
+                unit.in_buf[:] = values            # the inputs the master last set, as then
             for unit in self.instances:            # the caches follow the restored FMUs
                 unit.read_outputs()
 
@@ -428,7 +435,8 @@ class Master:
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))
         check_parameters(sc, self.fmu_paths)
-        order, self.in_loops = _dependency_order(list(by_name.values()))
+        order, loops = _dependency_order(list(by_name.values()))
+        self.in_loops = [u for u in order if u in loops]
         # inputs and outputs settle in one pass along a chain; around a feedback loop each pass
         # carries a change one link further
         self.passes = 1 + len(self.in_loops)
@@ -514,9 +522,15 @@ class JacobiMaster(Master):
 
     def exchange(self, units) -> None:
         """Every input from its source's outputs now (dependency order: along a chain
-        feedthrough settles in one pass; around a loop in one pass per unit on it)."""
-        for _ in range(self.passes):
-            for unit in units:
+        feedthrough settles in one pass; around a loop in one more pass per unit on it)."""
+        for unit in units:
+            unit.pull_inputs()
+            unit.read_outputs()
+        self.settle_loops()
+
+    def settle_loops(self) -> None:
+        for _ in range(self.passes - 1):
+            for unit in self.in_loops:
                 unit.pull_inputs()
                 unit.read_outputs()
 
@@ -531,7 +545,88 @@ class GaussSeidelMaster(Master):
             unit.read_outputs()
 
 
-MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster)}
+class IterativeMaster(JacobiMaster):
+    """Jacobi, with every communication step around a feedback loop repeated until the values
+    exchanged on it agree with those assumed (scenarios/coupling.py). Without a loop it is
+    Jacobi."""
+
+    name = "iterative"
+
+    def open(self) -> None:
+        from . import coupling
+
+        super().open()
+        loop = self.in_loops
+        downstream = [u for u in self.instances if u not in loop
+                      and any(_reaches(u, member) for member in loop)]
+        self.before = [u for u in self.instances if u not in loop and u not in downstream]
+        self.loop, self.after = loop, downstream
+        self.pairs = coupling.interpolated_inputs(loop)
+        self.loop_states = coupling.LoopStates(loop) if self.pairs else None
+        self.acceleration = coupling.Acceleration(self.scenario.acceleration)
+        self.iterations = 0            # passes over all steps
+        self.unconverged: list[tuple[float, float]] = []   # (t, largest |residual|)
+
+    def close(self) -> None:
+        if getattr(self, "loop_states", None) is not None:
+            self.loop_states.free()
+        super().close()
+
+    def exchange_and_step(self, units, t, h):
+        if self.loop_states is None:
+            return super().exchange_and_step(units, t, h)
+        from .coupling import MAX_ITERATIONS, converged, finite
+
+        for unit in self.before:
+            unit.do_step(t, h)
+        for unit in self.before:
+            unit.pull_inputs()
+            unit.read_outputs()
+        self.loop_states.save()
+        inputs_at_t = [list(unit.in_buf) for unit in self.loop]
+        start = np.array([unit.in_buf[k] for unit, k, _, _, _ in self.pairs])
+        rate = np.array([unit.in_buf[kd] for unit, _, kd, _, _ in self.pairs])
+        assumed = start + rate * h          # the explicit coupling's own guess
+        self.acceleration.start()
+        for iteration in range(MAX_ITERATIONS):
+            if iteration:
+                self.loop_states.restore()
+            for unit, saved in zip(self.loop, inputs_at_t):
+                unit.in_buf[:] = saved
+            for j, (unit, k, kd, _, _) in enumerate(self.pairs):
+                unit.in_buf[kd] = (assumed[j] - start[j]) / h
+            for unit in self.loop:
+                unit.set_inputs()
+                unit.do_step(t, h)
+            self.exchange(self.loop)
+            given = np.array([src.out_buf[idx] for _, _, _, src, idx in self.pairs])
+            residual = given - assumed
+            self.iterations += 1
+            if converged(residual, given, self.scenario.tolerance):
+                break
+
+            if not finite(residual):
+                break
+            assumed = self.acceleration.next(assumed, residual)
+        else:
+            self.unconverged.append((t, float(np.max(np.abs(residual)))))
+        for unit in self.after:
+            unit.do_step(t, h)
+        if self.after:
+            self.exchange(units)
+
+    def result(self) -> RunResult:
+        result = super().result()
+        steps = max(1, self.k)
+        result.coupling = {"iterations_per_step": self.iterations / steps,
+                           "unconverged_steps": len(self.unconverged)}
+        for t, size in self.unconverged[:5]:
+            result.log.append(f"[WARNING] iterative coupling: the step from t = {t:g} s did "
+                              f"not converge in its iterations (residual {size:.3g})")
+        return result
+
+
+MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster)}
 
 
 def _dependency_order(units: list[FmuInstance]) -> tuple[list[FmuInstance], list[FmuInstance]]:

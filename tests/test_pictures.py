@@ -39,6 +39,8 @@ def _recorded_point(scenario: str, result, i: int) -> tuple[float, float]:
         return col["takeup.E_z"][i] * 1e3, col["takeup.E_x"][i] * 1e3
     if scenario == "carriage_startstop":
         return col["drive.x"][i] * 1e3, 0.0
+    if scenario == "punch_split":
+        return 0.0, col["body.y"][i] * 1e3
     return 0.0, col["punch.y"][i] * 1e3
 
 
@@ -50,7 +52,8 @@ def _red_centre(frame: Image.Image) -> tuple[float, float]:
     return float(cols.mean()), float(rows.mean())
 
 
-@pytest.mark.parametrize("name", ["punch_drive", "feed", "takeup", "carriage_startstop"])
+@pytest.mark.parametrize("name", ["punch_drive", "punch_split", "feed", "takeup",
+                                  "carriage_startstop"])
 def test_the_animation_shows_the_recorded_run(tmp_path, name):
     result = simulate(load(name))
     anim = animate(result, tmp_path / f"{name}.gif")
@@ -65,8 +68,8 @@ def test_the_animation_shows_the_recorded_run(tmp_path, name):
     for k in (0, 9, 18, 27):
         i = anim.samples[k]
         x, y = _recorded_point(name, result, i)
-        if name == "punch_drive":       # the drawing's fabric surface is the punch's y = 0
-            y += anim.tracked[0][1] - result.columns["punch.y"][anim.samples[0]] * 1e3
+        if name.startswith("punch"):    # the drawing's fabric surface is the punch's y = 0
+            y += anim.tracked[0][1] - _recorded_point(name, result, anim.samples[0])[1]
         assert anim.tracked[k] == pytest.approx((x, y), abs=1e-9)
         gif.seek(k)
         col, row = _red_centre(gif)

@@ -129,7 +129,8 @@ def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, o
 def test_every_fmu_state_survives_serialization(fmu_paths):
     """Serialize each FMU's state to bytes, run on, restore from the bytes: the same steps."""
     for scenario, overrides in (("punch_drive", {}), ("punch_drive", ON_STOP),
-                                ("carriage_startstop", {}), ("takeup", {}), ("feed", {})):
+                                ("carriage_startstop", {}), ("takeup", {}), ("feed", {}),
+                                ("punch_split", {})):
         sc = load(scenario)
         sc.set_value("experiment.revolutions", 1)
         for name, value in overrides.items():
@@ -138,12 +139,13 @@ def test_every_fmu_state_survives_serialization(fmu_paths):
             for _ in range(master.n_steps // 4):                # on the stop, with ON_STOP
                 master.step()
             blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.instances]
+            inputs = [list(u.in_buf) for u in master.instances]
             k, row = master.k, master._row
             for _ in range(master.n_steps // 4):
                 master.step()
             first = master.result()
             master.restore_state((k, row, [u.fmu.deSerializeFMUstate(b)
-                                           for u, b in zip(master.instances, blobs)]))
+                                           for u, b in zip(master.instances, blobs)], inputs))
             for _ in range(master.n_steps // 4):
                 master.step()
             second = master.result()
