@@ -72,6 +72,11 @@ def cmd_run(args) -> None:
     print(f"{scenario.name}: results in {out}/")
     figures = summary.get("runs", {"": summary})
     for label, fig in figures.items():
+        if fig.get("master_unconverged_steps"):
+            print(f"sewfmu: warning: {label + ': ' if label else ''}the iterative coupling did "
+                  f"not converge in {fig['master_unconverged_steps']} steps (a shorter step or "
+                  f"a looser experiment.tolerance helps)", file=sys.stderr)
+    for label, fig in figures.items():
         shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in fig.items()
                           if k not in ("scenario", "master", "step", "stop_time", "provenance"))
         print(f"  {label + ': ' if label else ''}{shown}")

@@ -12,8 +12,8 @@
     shaft = "shaft"                         # optional: the MainShaft instance whose turns are
                                             # counted (default: the analysis's shaft)
     step = 2.5e-4                           # communication step (s)
-    master = "jacobi"                       # or "gauss-seidel", "iterative"
-    tolerance = 1e-6                        # iterative: agreement of the exchanged values
+    master = "jacobi"                       # or "gauss-seidel", "iterative", "adaptive"
+    tolerance = 1e-5                        # iterative (default 1e-6), adaptive (1e-5)
     acceleration = "aitken"                 # iterative: or "iqn-ils", "none"
     record_every = 1                        # optional: keep every n-th point (long runs)
 
@@ -45,9 +45,12 @@ from typing import Any
 
 from components.catalogue import FMUS
 
-MASTERS = ("jacobi", "gauss-seidel", "iterative")
+MASTERS = ("jacobi", "gauss-seidel", "iterative", "adaptive")
 ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
-DEFAULT_TOLERANCE = 1e-6          # iterative master: relative agreement of the exchanged values
+# experiment.tolerance, where not given: the iterative master's relative agreement of the
+# exchanged values; the adaptive master's local extrapolation error of the exchanged signals,
+# relative to their amplitude (scenarios/adaptive.py)
+DEFAULT_TOLERANCE = {"iterative": 1e-6, "adaptive": 1e-5}
 
 
 class ScenarioError(ValueError):
@@ -90,9 +93,13 @@ class Scenario:
     sweep: dict[str, Any] | None = None
     record_every: int = 1             # record every n-th communication point (long runs)
     roles: dict[str, str] = field(default_factory=dict)   # the analysis's role -> instance
-    tolerance: float = DEFAULT_TOLERANCE                  # iterative master
+    tolerance: float | None = None          # iterative, adaptive masters; None: their default
     acceleration: str = "aitken"                          # iterative master
     digest: str = ""                  # sha256 of the scenario file's text, as read
+
+    def coupling_tolerance(self) -> float:
+        """experiment.tolerance, or the master's default."""
+        return self.tolerance or DEFAULT_TOLERANCE.get(self.master, 1e-6)
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)

@@ -254,6 +254,21 @@ class FmuInstance:
                 buf[k] = src.out_buf[idx]
             self.set_inputs()
 
+    def pull_changed_inputs(self) -> bool:
+        """Within one instant: set the inputs again only if a source's output changed (setting
+        an input restarts its extrapolation, so the first setting at an instant is always
+        made, by pull_inputs); whether any did."""
+        changed = False
+        buf = self.in_buf
+        for k, (src, idx) in enumerate(self.in_sources):
+            value = src.out_buf[idx]
+            if buf[k] != value:
+                buf[k] = value
+                changed = True
+        if changed:
+            self.set_inputs()
+        return changed
+
     def set_inputs(self) -> None:
         """Set every connected input to its value in in_buf."""
         status = self._set_real(self.component, self.in_vr, self.n_in, self.in_buf)
@@ -308,15 +323,22 @@ class Master:
         started = clock.perf_counter()
         every = self.PROGRESS_EVERY
         with interrupt.deferred(), self:
-            while self.k < self.n_steps:
+            while not self.finished():
                 self.step()
                 if interrupt.pending:
                     interrupt.raise_pending()
                 if progress is not None and self.k % every == 0:
-                    progress(self.k, self.n_steps)
+                    progress(*self.progress_point())
             result = self.result()
         result.wall_time = clock.perf_counter() - started
         return result
+
+    def finished(self) -> bool:
+        return self.k >= self.n_steps
+
+    def progress_point(self) -> tuple[int, int]:
+        """(done, total) for a progress report: communication steps."""
+        return self.k, self.n_steps
 
     def __enter__(self) -> "Master":
         try:
@@ -531,8 +553,8 @@ class JacobiMaster(Master):
     def settle_loops(self) -> None:
         for _ in range(self.passes - 1):
             for unit in self.in_loops:
-                unit.pull_inputs()
-                unit.read_outputs()
+                if unit.pull_changed_inputs():    # unchanged: the outputs read stand
+                    unit.read_outputs()
 
 
 class GaussSeidelMaster(Master):
@@ -602,7 +624,7 @@ class IterativeMaster(JacobiMaster):
             given = np.array([src.out_buf[idx] for _, _, _, src, idx in self.pairs])
             residual = given - assumed
             self.iterations += 1
-            if converged(residual, given, self.scenario.tolerance):
+            if converged(residual, given, self.scenario.coupling_tolerance()):
                 break
 
             if not finite(residual):
@@ -626,7 +648,10 @@ class IterativeMaster(JacobiMaster):
         return result
 
 
-MASTER_CLASSES = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster)}
+def _master_classes() -> dict[str, type]:
+    from .adaptive import AdaptiveMaster
+    return {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster,
+                                      AdaptiveMaster)}
 
 
 def _dependency_order(units: list[FmuInstance]) -> tuple[list[FmuInstance], list[FmuInstance]]:
@@ -663,4 +688,4 @@ def _reaches(start: FmuInstance, target: FmuInstance) -> bool:
 
 
 def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:
-    return MASTER_CLASSES[scenario.master](scenario, fmu_paths).run(progress)
+    return _master_classes()[scenario.master](scenario, fmu_paths).run(progress)

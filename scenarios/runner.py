@@ -102,9 +102,11 @@ def summarize(result: RunResult) -> dict:
     figures = {}
     if sc.analysis:
         figures = analyses.module(sc.analysis).summary_of_run(result)
+    # what the master did: the iterative master's passes, the adaptive master's steps
+    master = {f"master_{k}": v for k, v in result.coupling.items()}
     return {"scenario": sc.name, "master": sc.master, "step": sc.step,
             "stop_time": float(result.time[-1]), "wall_time_s": round(result.wall_time, 4),
-            **figures}
+            **master, **figures}
 
 
 def write_csv(result: RunResult, path: Path) -> None:
@@ -151,6 +153,9 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     return {"scenario": {"name": scenario.name, "source": scenario.source,
                          "sha256": scenario.digest or None},
             "instances": instances, "master": scenario.master, "step": scenario.step,
+            **({"tolerance": scenario.coupling_tolerance()}
+               if scenario.master in ("iterative", "adaptive") else {}),
+            **({"acceleration": scenario.acceleration} if scenario.master == "iterative" else {}),
             "end_time": scenario.end_time(), "sewfmu": VERSION,
             "fmus": {fmu: md.version for fmu, md in sorted(described.items())}}
 

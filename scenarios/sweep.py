@@ -59,7 +59,8 @@ def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
         "record": scenario.record, "analysis": scenario.analysis, "roles": scenario.roles,
         "experiment": {"step": scenario.step, "master": scenario.master,
                        "stop_time": scenario.stop_time, "revolutions": scenario.revolutions,
-                       "shaft": scenario.shaft, "record_every": scenario.record_every},
+                       "shaft": scenario.shaft, "record_every": scenario.record_every,
+                       "tolerance": scenario.tolerance, "acceleration": scenario.acceleration},
         "fmus": {fmu: fmu_version(Path(path)) for fmu, path in sorted(fmu_paths.items())},
     }
     return json.dumps(content, sort_keys=True, default=repr)

@@ -12,11 +12,13 @@ from components.feed import FeedParams
 from components.parameters import parameter_info
 from components.punch_contact import PunchContactParams
 from components.punch_linkage import PunchLinkageParams
+from components.punch_split import FabricParams, PunchBodyParams
 from components.shaft import ShaftParams
 from components.takeup import TakeupParams
 
 REPO = Path(__file__).resolve().parent.parent
-PAGES = {"punch_drive.md": (ShaftParams, PunchLinkageParams, PunchContactParams),
+PAGES = {"punch_drive.md": (ShaftParams, PunchLinkageParams, PunchContactParams, PunchBodyParams,
+                            FabricParams),
          "carriage.md": (CarriageParams, CarriageDriveParams),
          "feed.md": (FeedParams,), "takeup.md": (TakeupParams,)}
 

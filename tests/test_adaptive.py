@@ -1,0 +1,70 @@
+"""The adaptive master: the punch drive's figures at the accuracy of a tight monolithic solution,
+read from non-uniform samples; rejected steps rolled back exactly; the one-way scenarios run."""
+import numpy as np
+import pytest
+
+from scenarios.adaptive import AdaptiveMaster
+from scenarios.format import load
+from scenarios.master import run
+from scenarios.runner import monolithic_summary, summarize
+
+
+def _adaptive(fmu_paths, name="punch_drive", tolerance=None):
+    sc = load(name)
+    sc.master, sc.tolerance = "adaptive", tolerance
+    return sc, run(sc, fmu_paths)
+
+
+def test_the_adaptive_master_reaches_the_monolithic_accuracy_target(fmu_paths):
+    """Against a tight monolithic solution: contact onset and loss within 0.002°, F2_peak within
+    0.005 N, F2_weld_mean within 0.002 N (what the monolithic solver gives at rtol 1e-4)."""
+    sc, result = _adaptive(fmu_paths)
+    figures = summarize(result)
+    tight, _ = monolithic_summary(sc)
+    assert abs(figures["contact_onset_deg"] - tight["contact_onset_deg"]) < 0.002
+    assert abs(figures["contact_loss_deg"] - tight["contact_loss_deg"]) < 0.002
+    assert abs(figures["F2_peak"] - tight["F2_peak"]) < 0.005
+    assert abs(figures["F2_weld_mean"] - tight["F2_weld_mean"]) < 0.002
+    # non-uniform steps: long between the switches, short around them
+    steps = np.diff(result.time)
+    assert steps.max() > 2.5 * sc.step and steps.min() <= sc.step / 16 * (1 + 1e-9)
+    assert figures["master_steps"] == len(result.time) - 1
+    assert figures["master_rejected_steps"] > 0
+
+
+def test_a_tighter_tolerance_gives_smaller_errors(fmu_paths):
+    tight, _ = monolithic_summary(load("punch_drive"))
+    errors = []
+    for tolerance in (1e-3, 1e-4, 1e-6):
+        _, result = _adaptive(fmu_paths, tolerance=tolerance)
+        errors.append(abs(summarize(result)["F2_weld_mean"] - tight["F2_weld_mean"]))
+    assert errors[0] > errors[1] > errors[2]
+
+
+def test_a_rejected_step_is_rolled_back_bit_for_bit(fmu_paths):
+    sc = load("punch_split")
+    sc.master = "adaptive"
+    master = AdaptiveMaster(sc, fmu_paths)
+    with master:
+        while master.t < 0.22:                    # the fourth revolution, pressing
+            master.step()
+        t, h = master.t, 3e-4
+        master.states.save()
+        inputs = [list(u.in_buf) for u in master.instances]
+        master.exchange_and_step(master.instances, t, h)
+        first = [list(u.out_buf) for u in master.instances]
+        master._roll_back(inputs)
+        assert [list(u.in_buf) for u in master.instances] == inputs
+        master.exchange_and_step(master.instances, t, h)
+        again = [list(u.out_buf) for u in master.instances]
+    assert first == again
+    assert first[2] != inputs[2]                  # the step did move the punch
+
+
+@pytest.mark.parametrize("name, figure, within", [("feed", "phi5_swing_deg", 0.02),
+                                                  ("takeup", "stroke_mm", 0.05)])
+def test_the_adaptive_master_runs_the_one_way_scenarios(fmu_paths, name, figure, within):
+    sc = load(name)
+    fixed = summarize(run(sc, fmu_paths))
+    _, result = _adaptive(fmu_paths, name)
+    assert summarize(result)[figure] == pytest.approx(fixed[figure], abs=within)
