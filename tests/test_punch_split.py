@@ -146,3 +146,9 @@ def test_the_body_alone_moves_as_the_punch_without_the_fabric():
         pushed = body.step(pushed, xi, 0.0, 0.0, 1e-3, 10.0, 0.0)
     p = PunchContactParams()
     assert pushed.y - rest.y == pytest.approx(10.0 / (p.c1 + p.c3), rel=1e-9)
+
+
+def test_gauss_seidel_refuses_a_feedback_loop(fmu_paths):
+    from scenarios.format import ScenarioError
+    with pytest.raises(ScenarioError, match="gauss-seidel.*feedback loop of body, fabric"):
+        _split(fmu_paths, master="gauss-seidel")
