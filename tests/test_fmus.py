@@ -15,6 +15,7 @@ from fmpy.validation import validate_fmu
 
 from components.carriage import CarriageDrive
 from components.catalogue import FMUS
+from components.punch_split import PunchBody
 from components.punch_contact import GRAVITY, PunchContactParams
 from components.punch_linkage import PunchLinkage
 from components.shaft import MainShaft
@@ -319,8 +320,7 @@ print("ok")
 """
 
 
-@pytest.mark.parametrize("name", ["MainShaft", "PunchLinkage", "PunchContact", "TakeupLinkage",
-                                  "FeedLinkage", "CarriageDrive", "CarriageModal"])
+@pytest.mark.parametrize("name", list(FMUS))
 def test_the_code_an_fmu_carries_runs_on_the_standard_library_alone(fmu_paths, tmp_path, name):
     """python -S -I: no site-packages, no environment: only the FMU's resources folder."""
     with zipfile.ZipFile(fmu_paths[name]) as zf:
@@ -356,6 +356,16 @@ def test_input_start_values_are_the_default_setup(fmu_paths):
     e = PunchLinkage().motion(*shaft)
     assert _starts(fmu_paths["PunchContact"]) == pytest.approx(
         {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}, rel=1e-12, abs=1e-12)
+    # split at the fabric: the body as PunchContact, no fabric force yet; the fabric sees the
+    # punch at rest at the top, accelerated down by spring 6 (the body's own y'' at t = 0)
+    assert _starts(fmu_paths["PunchBody"]) == pytest.approx(
+        {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot, "F2": 0.0, "F2_dot": 0.0},
+        rel=1e-12, abs=1e-12)
+    body = PunchBody()
+    at_rest = body.outputs(body.initial_state(e.xi, e.xi_dot, e.xi_ddot), e.xi, e.xi_dot,
+                           e.xi_ddot)
+    assert _starts(fmu_paths["Fabric"]) == pytest.approx(
+        {"y": at_rest.y, "y_dot": at_rest.y_dot, "y_ddot": at_rest.y_ddot}, rel=1e-12, abs=1e-12)
     omega = 1600 * 2 * math.pi / 60
     _, _, a, jerk = CarriageDrive().motion(0.0, omega, 0.0)
     assert _starts(fmu_paths["CarriageModal"]) == pytest.approx(
