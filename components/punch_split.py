@@ -19,10 +19,9 @@ own new state.
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields, make_dataclass
 
-from .parameters import CHOICE, NONNEGATIVE, parameter, validate
+from .parameters import validate
 from .punch_contact import PunchContact, PunchContactParams
 
 # the fabric's switch search: sub-intervals per step (its extrapolated motion is a parabola, so
@@ -31,23 +30,23 @@ _FABRIC_INTERVALS = 8
 _TIME_RESOLUTION = 1e-15
 
 
-@dataclass(frozen=True)
-class PunchBodyParams:
-    m: float = parameter(0.063, "kg", "mass of the punch with its holder")
-    F10: float = parameter(20.0, "N", "preload of the closing spring 6", NONNEGATIVE)
-    c1: float = parameter(2000.0, "N/m", "stiffness of the closing spring 6")
-    b1: float = parameter(0.71, "N.s/m", "damping of the closing spring 6", NONNEGATIVE)
-    c3: float = parameter(1.0e5, "N/m", "stiffness of spring 11 (slider to stop)")
-    b3: float = parameter(7.10, "N.s/m", "damping of spring 11", NONNEGATIVE)
-    F30: float = parameter(0.0, "N", "preload of spring 11", NONNEGATIVE)
-    compression_only: int = parameter(0, "1", "spring 11: 0 bilateral (the paper's equation), "
-                                      "1 compression only", CHOICE, choices=(0, 1))
+# the fabric's parameters: what PunchContact's law of F2 uses
+FABRIC = ("c2", "b2")
 
 
-@dataclass(frozen=True)
-class FabricParams:
-    c2: float = parameter(5.0e4, "N/m", "contact stiffness of the fabric")
-    b2: float = parameter(97.64, "N.s/m", "contact damping of the fabric", NONNEGATIVE)
+def _params_of_punch(name: str, keep) -> type:
+    """A parameter dataclass with PunchContact's parameters that `keep` selects: the same
+    defaults, units, descriptions and order, declared once."""
+    chosen = [(f.name, f.type, field(default=f.default, metadata=f.metadata))
+              for f in fields(PunchContactParams) if keep(f.name)]
+    made = make_dataclass(name, chosen, frozen=True)
+    made.__module__ = __name__
+    return made
+
+
+# PunchContact's parameters without the fabric's, and the fabric's alone
+PunchBodyParams = _params_of_punch("PunchBodyParams", lambda name: name not in FABRIC)
+FabricParams = _params_of_punch("FabricParams", lambda name: name in FABRIC)
 
 
 class PunchBody(PunchContact):
@@ -57,7 +56,7 @@ class PunchBody(PunchContact):
         validate(params)
         values = {f.name: getattr(params, f.name) for f in fields(params)}
         # no fabric inside: with c2 = b2 = 0 the contact set {y < 0, c2·y + b2·y' < 0} is empty
-        self._set_up(PunchContactParams(**values, c2=0.0, b2=0.0))
+        self._set_up(PunchContactParams(**values, **{name: 0.0 for name in FABRIC}))
 
 
 @dataclass(frozen=True)
@@ -140,8 +139,3 @@ def _bisect(flipped, lo: float, hi: float) -> float:
         else:
             lo = mid
     return hi
-
-
-def fabric_period(body: PunchBodyParams, fabric: FabricParams) -> float:
-    """The shortest natural period of the punch pressed into the fabric (for step choices)."""
-    return 2.0 * math.pi * math.sqrt(body.m / (body.c1 + fabric.c2 + body.c3))
