@@ -26,6 +26,8 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2FMUstate
 
+from .master import JacobiMaster, RunResult, reaches
+
 ACCELERATIONS = ("aitken", "iqn-ils", "none")
 MAX_ITERATIONS = 25
 INITIAL_RELAXATION = 0.5
@@ -114,3 +116,80 @@ def converged(r: np.ndarray, given: np.ndarray, tolerance: float) -> bool:
 
 def finite(values: np.ndarray) -> bool:
     return math.isfinite(float(np.sum(values)))
+
+
+class IterativeMaster(JacobiMaster):
+    """Jacobi, with every communication step around a feedback loop repeated until the values
+    exchanged on it agree with those assumed (scenarios/coupling.py). Without a loop it is
+    Jacobi."""
+
+    name = "iterative"
+
+    def open(self) -> None:
+        super().open()
+        loop = self.in_loops
+        downstream = [u for u in self.instances if u not in loop
+                      and any(reaches(u, member) for member in loop)]
+        self.before = [u for u in self.instances if u not in loop and u not in downstream]
+        self.loop, self.after = loop, downstream
+        self.pairs = interpolated_inputs(loop)
+        self.loop_states = LoopStates(loop) if self.pairs else None
+        self.acceleration = Acceleration(self.scenario.acceleration)
+        self.iterations = 0            # passes over all steps
+        self.unconverged: list[tuple[float, float]] = []   # (t, largest |residual|)
+
+    def close(self) -> None:
+        if getattr(self, "loop_states", None) is not None:
+            self.loop_states.free()
+        super().close()
+
+    def exchange_and_step(self, units, t, h):
+        if self.loop_states is None:
+            return super().exchange_and_step(units, t, h)
+        for unit in self.before:
+            unit.do_step(t, h)
+        for unit in self.before:
+            unit.pull_inputs()
+            unit.read_outputs()
+        self.loop_states.save()
+        inputs_at_t = [list(unit.in_buf) for unit in self.loop]
+        start = np.array([unit.in_buf[k] for unit, k, _, _, _ in self.pairs])
+        rate = np.array([unit.in_buf[kd] for unit, _, kd, _, _ in self.pairs])
+        assumed = start + rate * h          # the explicit coupling's own guess
+        self.acceleration.start()
+        for iteration in range(MAX_ITERATIONS):
+            if iteration:
+                self.loop_states.restore()
+            for unit, saved in zip(self.loop, inputs_at_t):
+                unit.in_buf[:] = saved
+            for j, (unit, k, kd, _, _) in enumerate(self.pairs):
+                unit.in_buf[kd] = (assumed[j] - start[j]) / h
+            for unit in self.loop:
+                unit.set_inputs()
+                unit.do_step(t, h)
+            self.exchange(self.loop)
+            given = np.array([src.out_buf[idx] for _, _, _, src, idx in self.pairs])
+            residual = given - assumed
+            self.iterations += 1
+            if converged(residual, given, self.scenario.coupling_tolerance()):
+                break
+
+            if not finite(residual):
+                break
+            assumed = self.acceleration.next(assumed, residual)
+        else:
+            self.unconverged.append((t, float(np.max(np.abs(residual)))))
+        for unit in self.after:
+            unit.do_step(t, h)
+        if self.after:
+            self.exchange(units)
+
+    def result(self) -> RunResult:
+        result = super().result()
+        steps = max(1, self.k)
+        result.coupling = {"iterations_per_step": self.iterations / steps,
+                           "unconverged_steps": len(self.unconverged)}
+        for t, size in self.unconverged[:5]:
+            result.log.append(f"[WARNING] iterative coupling: the step from t = {t:g} s did "
+                              f"not converge in its iterations (residual {size:.3g})")
+        return result

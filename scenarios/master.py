@@ -15,6 +15,10 @@ whatever happens. A variant declares only its `exchange_and_step`:
   FMUs that extrapolate their inputs then run one step early per link, a first-order error
   (1.15° of crank angle at h = 1e-4 s on punch_drive, two links).
 
+Two masters for feedback build on Jacobi: the iterative master (scenarios/coupling.py) repeats a
+step around a feedback loop until the exchanged values agree, the adaptive master
+(scenarios/adaptive.py) sizes each step from the error of the exchanged signals.
+
 Value references are resolved once; each step makes one batched set and one batched get per FMU
 through preallocated ctypes arrays (no lookups by name, no per-step allocation).
 """
@@ -33,9 +37,16 @@ from pathlib import Path
 import numpy as np
 from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2CallbackAllocateMemoryTYPE, \
-    fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2Real, \
-    fmi2ValueReference
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2Boolean,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+    fmi2Real,
+    fmi2ValueReference,
+)
 
 from . import interrupt
 from .format import Scenario, ScenarioError
@@ -55,7 +66,7 @@ class RunResult:
     columns: dict[str, np.ndarray]
     wall_time: float
     log: list[str] = field(default_factory=list)
-    coupling: dict = field(default_factory=dict)     # the iterative master's statistics
+    coupling: dict = field(default_factory=dict)     # what the iterative or adaptive master did
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -578,89 +589,10 @@ class GaussSeidelMaster(Master):
             unit.read_outputs()
 
 
-class IterativeMaster(JacobiMaster):
-    """Jacobi, with every communication step around a feedback loop repeated until the values
-    exchanged on it agree with those assumed (scenarios/coupling.py). Without a loop it is
-    Jacobi."""
-
-    name = "iterative"
-
-    def open(self) -> None:
-        from . import coupling
-
-        super().open()
-        loop = self.in_loops
-        downstream = [u for u in self.instances if u not in loop
-                      and any(_reaches(u, member) for member in loop)]
-        self.before = [u for u in self.instances if u not in loop and u not in downstream]
-        self.loop, self.after = loop, downstream
-        self.pairs = coupling.interpolated_inputs(loop)
-        self.loop_states = coupling.LoopStates(loop) if self.pairs else None
-        self.acceleration = coupling.Acceleration(self.scenario.acceleration)
-        self.iterations = 0            # passes over all steps
-        self.unconverged: list[tuple[float, float]] = []   # (t, largest |residual|)
-
-    def close(self) -> None:
-        if getattr(self, "loop_states", None) is not None:
-            self.loop_states.free()
-        super().close()
-
-    def exchange_and_step(self, units, t, h):
-        if self.loop_states is None:
-            return super().exchange_and_step(units, t, h)
-        from .coupling import MAX_ITERATIONS, converged, finite
-
-        for unit in self.before:
-            unit.do_step(t, h)
-        for unit in self.before:
-            unit.pull_inputs()
-            unit.read_outputs()
-        self.loop_states.save()
-        inputs_at_t = [list(unit.in_buf) for unit in self.loop]
-        start = np.array([unit.in_buf[k] for unit, k, _, _, _ in self.pairs])
-        rate = np.array([unit.in_buf[kd] for unit, _, kd, _, _ in self.pairs])
-        assumed = start + rate * h          # the explicit coupling's own guess
-        self.acceleration.start()
-        for iteration in range(MAX_ITERATIONS):
-            if iteration:
-                self.loop_states.restore()
-            for unit, saved in zip(self.loop, inputs_at_t):
-                unit.in_buf[:] = saved
-            for j, (unit, k, kd, _, _) in enumerate(self.pairs):
-                unit.in_buf[kd] = (assumed[j] - start[j]) / h
-            for unit in self.loop:
-                unit.set_inputs()
-                unit.do_step(t, h)
-            self.exchange(self.loop)
-            given = np.array([src.out_buf[idx] for _, _, _, src, idx in self.pairs])
-            residual = given - assumed
-            self.iterations += 1
-            if converged(residual, given, self.scenario.coupling_tolerance()):
-                break
-
-            if not finite(residual):
-                break
-            assumed = self.acceleration.next(assumed, residual)
-        else:
-            self.unconverged.append((t, float(np.max(np.abs(residual)))))
-        for unit in self.after:
-            unit.do_step(t, h)
-        if self.after:
-            self.exchange(units)
-
-    def result(self) -> RunResult:
-        result = super().result()
-        steps = max(1, self.k)
-        result.coupling = {"iterations_per_step": self.iterations / steps,
-                           "unconverged_steps": len(self.unconverged)}
-        for t, size in self.unconverged[:5]:
-            result.log.append(f"[WARNING] iterative coupling: the step from t = {t:g} s did "
-                              f"not converge in its iterations (residual {size:.3g})")
-        return result
-
-
 def _master_classes() -> dict[str, type]:
+    # the masters for feedback live beside the pieces they are made of
     from .adaptive import AdaptiveMaster
+    from .coupling import IterativeMaster
     return {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster,
                                       AdaptiveMaster)}
 
@@ -680,12 +612,12 @@ def _dependency_order(units: list[FmuInstance]) -> tuple[list[FmuInstance], list
             placed.add(u.name)
             remaining.remove(u)
     for unit in units:
-        if _reaches(unit, unit):
+        if reaches(unit, unit):
             in_loops.append(unit)
     return order, in_loops
 
 
-def _reaches(start: FmuInstance, target: FmuInstance) -> bool:
+def reaches(start: FmuInstance, target: FmuInstance) -> bool:
     """Whether a signal from `target` comes back to `start` through the connections."""
     seen, todo = set(), [src for _, src, _ in start.inputs]
     while todo:

@@ -9,8 +9,9 @@ import pytest
 from components.punch_contact import PunchContact, PunchContactParams
 from components.punch_split import Fabric, FabricParams, PunchBody
 from scenarios import coupling
+from scenarios.coupling import IterativeMaster
 from scenarios.format import load
-from scenarios.master import IterativeMaster, run
+from scenarios.master import run
 from scenarios.runner import monolithic_summary, summarize
 
 
