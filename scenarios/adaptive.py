@@ -108,10 +108,11 @@ class AdaptiveMaster(JacobiMaster):
                                              for *_, src, idx in self.chains])
         growth = GROWTH if error == 0.0 else min(GROWTH, SAFETY * error ** (-1 / 3))
         self.h = min(self.h_max, max(self.h_min, h * max(growth, SHRINK)))
-        row = np.empty(len(self.columns))
-        self._record(row[None, :], 0)
-        self.times.append(self.t)
-        self.rows.append(row)
+        if self.k % self.every == 0 or self.finished():      # experiment.record_every
+            row = np.empty(len(self.columns))
+            self._record(row[None, :], 0)
+            self.times.append(self.t)
+            self.rows.append(row)
 
     def _error(self, inputs, h: float) -> float:
         """The largest extrapolation error of the step, relative to tolerance × amplitude."""

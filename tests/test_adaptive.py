@@ -68,3 +68,12 @@ def test_the_adaptive_master_runs_the_one_way_scenarios(fmu_paths, name, figure,
     fixed = summarize(run(sc, fmu_paths))
     _, result = _adaptive(fmu_paths, name)
     assert summarize(result)[figure] == pytest.approx(fixed[figure], abs=within)
+
+
+def test_record_every_keeps_every_nth_accepted_step(fmu_paths):
+    sc = load("punch_drive")
+    sc.master, sc.record_every, sc.revolutions = "adaptive", 10, 2
+    result = run(sc, fmu_paths)
+    assert len(result.time) == result.coupling["steps"] // 10 + 1 + (
+        result.coupling["steps"] % 10 != 0)
+    assert result.time[-1] == pytest.approx(sc.end_time(), rel=1e-12)
