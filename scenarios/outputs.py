@@ -3,12 +3,13 @@
 - `write_atomic` writes a file through a temporary beside it and renames it into place, so a
   reader never sees half a file; the file gets the permissions the user's umask gives (Python's
   temporary files would be 0600).
-- `replacing(folder)` gives a run a staging folder beside its output folder; only when the whole
-  run has succeeded does the staging folder replace the old one, so a run that fails or is
-  interrupted (in its third [compare] variant, say) leaves the previous results as they were,
-  never a mix of old and new.
+- `replacing(folder)` gives a run a staging folder inside its output folder; only when the whole
+  run has succeeded do the staged files take their places, replacing what the previous run wrote
+  there (listed in the folder's MANIFEST), and nothing else: a user's own files in the folder stay.
+  A run that fails or is interrupted (in its third [compare] variant, say) leaves the previous
+  results as they were, never a mix of old and new.
 - Temporaries carry the writing process's id in their names (".NAME.PID.tmp",
-  ".FOLDER.PID.partial"). A killed process cannot clean up after itself; the next run into the
+  ".sewfmu.PID.partial"). A killed process cannot clean up after itself; the next run into the
   same place removes what dead processes left (`remove_debris`).
 """
 from __future__ import annotations
@@ -93,41 +94,52 @@ def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
     return removed
 
 
-def _check_replaceable(folder: Path) -> None:
-    """A run replaces its output folder whole: refuse folders that hold something else."""
-    here = Path.cwd().resolve()
-    target = folder.resolve()
-    if target == here or target in here.parents:
-        raise OutputError(f"output folder {folder}: this is the current folder (or holds it); "
-                          f"a run replaces its output folder whole, give a folder of its own")
-    if folder.exists() and not folder.is_dir():
-        raise OutputError(f"output folder {folder}: exists and is not a folder")
-    if folder.is_dir() and any(folder.iterdir()) and not (folder / "summary.json").exists():
-        raise OutputError(f"output folder {folder}: holds files that are not a sewfmu result "
-                          f"(no summary.json); a run replaces its output folder whole, so give "
-                          f"an empty or new folder")
+MANIFEST = ".sewfmu-outputs"      # what the last run wrote into an output folder, one per line
+
+
+def _entries_of_last_run(folder: Path) -> list[str]:
+    try:
+        lines = (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return []
+    # only plain names inside the folder: a damaged manifest must not reach outside it
+    return [n for n in lines if n and "/" not in n and "\\" not in n and n not in (".", "..")]
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
 
 
 @contextlib.contextmanager
 def replacing(folder: Path):
-    """Yield a staging folder; when the block succeeds it becomes `folder` (the previous results
-    go), when it fails or is interrupted it is removed and `folder` stays as it was."""
+    """Yield a staging folder; when the block succeeds its entries take their places in `folder`
+    (the previous run's outputs go, the user's other files stay), when it fails or is interrupted
+    it is removed and `folder` stays as it was."""
     folder = Path(folder)
-    _check_replaceable(folder)
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    remove_debris(folder.parent)
-    staging = _temporary(folder, "partial")
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"output folder {folder}: exists and is not a folder")
+    created = not folder.exists()
+    folder.mkdir(parents=True, exist_ok=True)
+    remove_debris(folder)
+    staging = folder / f".sewfmu.{os.getpid()}.partial"
     shutil.rmtree(staging, ignore_errors=True)
     os.mkdir(staging)                        # mode from the umask
     try:
         yield staging
-        if folder.exists():
-            old = _temporary(folder, "old")
-            os.rename(folder, old)
-            os.rename(staging, folder)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(staging, folder)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
+        if created:
+            with contextlib.suppress(OSError):
+                folder.rmdir()               # only if nothing else is in it
         raise
+    new = sorted(entry.name for entry in staging.iterdir())
+    for name in set(_entries_of_last_run(folder)) | set(new):
+        _remove(folder / name)
+    for name in new:
+        os.rename(staging / name, folder / name)
+    write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n" for n in new)))
+    shutil.rmtree(staging, ignore_errors=True)

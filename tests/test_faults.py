@@ -336,14 +336,14 @@ def test_files_follow_the_umask(tmp_path, mask):
 def test_what_killed_runs_left_is_removed_by_the_next_run(tmp_path):
     dead = _dead_pid()
     out = tmp_path / "out"
-    staging = tmp_path / f".out.{dead}.partial"
-    staging.mkdir()
+    staging = out / f".sewfmu.{dead}.partial"
+    staging.mkdir(parents=True)
     (staging / "results.csv").write_bytes(b"0" * 100_000)
     sweep = tmp_path / "sweep"
     (sweep / "points" / "x").mkdir(parents=True)
     torn = sweep / "points" / "x" / f".results.csv.{dead}.tmp"
     torn.write_bytes(b"1" * 100_000)
-    alive = tmp_path / f".other.{os.getpid()}.partial"        # a live process's: kept
+    alive = out / f".sewfmu.{os.getppid()}.partial"           # a live process's: kept
     alive.mkdir()
     assert main(["run", "punch_drive", "--set", "experiment.revolutions=1", "--out", str(out)]) == 0
     assert not staging.exists() and alive.exists()
@@ -352,17 +352,25 @@ def test_what_killed_runs_left_is_removed_by_the_next_run(tmp_path):
     assert not torn.exists()
 
 
-def test_an_output_folder_holding_other_files_is_refused(tmp_path, capsys, monkeypatch):
+def test_a_users_own_files_in_the_output_folder_stay(tmp_path, monkeypatch):
+    """A run replaces what the previous run wrote there, and nothing else: a scenario kept beside
+    its results, a compare run that had variant folders, the current folder as --out."""
     mine = tmp_path / "thesis"
     mine.mkdir()
     (mine / "chapter1.tex").write_text("precious")
-    assert main(["run", "punch_drive", "--set", "experiment.revolutions=1", "--out", str(mine)]) == 1
-    err = capsys.readouterr().err
-    assert "thesis" in err and "not a sewfmu result" in err
-    assert os.listdir(mine) == ["chapter1.tex"]
+    scenario = mine / "mine.toml"
+    scenario.write_text(PUNCH.replace("revolutions = 10", "revolutions = 1")
+                        + '\n[compare]\nparameter = "shaft.omega0"\nvalues = [100.0, 200.0]\n')
+    assert main(["run", str(scenario), "--out", str(mine)]) == 0
+    assert {"chapter1.tex", "mine.toml", "summary.json", "shaft.omega0=100",
+            "shaft.omega0=200"} <= set(os.listdir(mine))
+    # the same folder, now without [compare]: the old variant folders go, the user's files stay
+    scenario.write_text(PUNCH.replace("revolutions = 10", "revolutions = 1"))
     monkeypatch.chdir(mine)
-    assert main(["run", "punch_drive", "--set", "experiment.revolutions=1", "--out", "."]) == 1
-    assert "current folder" in capsys.readouterr().err
+    assert main(["run", "mine.toml", "--out", "."]) == 0
+    assert sorted(p for p in os.listdir(mine) if not p.startswith(".")) == \
+        ["chapter1.tex", "mine.toml", "results.csv", "summary.json"]
+    assert (mine / "chapter1.tex").read_text() == "precious"
 
 
 # --- scenario mistakes that used to pass silently ------------------------------------------------
