@@ -96,6 +96,8 @@ class Scenario:
     tolerance: float | None = None          # iterative, adaptive masters; None: their default
     acceleration: str = "aitken"                          # iterative master
     digest: str = ""                  # sha256 of the scenario file's text, as read
+    # FMU type -> file, for a system read from SSP (scenarios/ssp_import.py): its own FMUs
+    fmu_files: dict[str, Path] = field(default_factory=dict)
 
     def coupling_tolerance(self) -> float:
         """experiment.tolerance, or the master's default."""
@@ -112,6 +114,13 @@ class Scenario:
         from components.parameters import ParameterError, with_values
         from components.shaft import MainShaft, ShaftParams
 
+        if self.shaft is None:        # revolutions set later (--set): the shaft as from_dict finds it
+            shafts = [n for n, inst in self.instances.items() if inst.fmu == "MainShaft"]
+            self.shaft = self.roles.get("shaft") or (shafts[0] if len(shafts) == 1 else None)
+        if self.shaft not in self.instances:
+            raise ScenarioError(f"{self.source}: experiment.revolutions needs the MainShaft "
+                                f"instance whose turns are counted (experiment.shaft), or give "
+                                f"experiment.stop_time")
         inst = self.instances[self.shaft]
         try:
             params = with_values(ShaftParams(), **inst.parameters)
@@ -219,6 +228,8 @@ def catalogue() -> dict[str, Path]:
 
 def resolve(name_or_path: str) -> Path:
     path = Path(name_or_path)
+    if path.suffix.lower() in (".ssp", ".ssd"):
+        return path
     if path.suffix == ".toml":
         if not path.is_file():
             raise ScenarioError(f"scenario file {path} does not exist")
@@ -231,7 +242,11 @@ def resolve(name_or_path: str) -> Path:
 
 
 def load(name_or_path: str) -> Scenario:
+    """A catalogue scenario, a TOML scenario file, or an SSP system (.ssp or .ssd)."""
     path = resolve(name_or_path)
+    if path.suffix.lower() in (".ssp", ".ssd"):
+        from .ssp_import import load_ssp
+        return load_ssp(path)
     try:
         text = _text_of(path.read_bytes(), path)
         data = tomllib.loads(text)

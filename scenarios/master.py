@@ -366,6 +366,9 @@ class Master:
         """Load the FMUs, initialize them in dependency order, record the initial point."""
         sc = self.scenario
         self.stop = sc.end_time()
+        if not sc.step > 0:          # an SSP system that gives none
+            raise ScenarioError(f"{sc.source}: no communication step: the file gives none; "
+                                f"pass --set experiment.step=…")
         if sc.step > self.stop:
             raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
                                 f"run ({self.stop:g} s)")
@@ -463,7 +466,9 @@ class Master:
             in_var = dst.variable(con.dst_var, ("input",), what)
             if out_var.type != "Real" or in_var.type != "Real":
                 raise ScenarioError(f"{what}: only Real connections are supported")
-            if (out_var.unit or "") != (in_var.unit or ""):
+            # a variable without a unit says nothing about it (FMUs from elsewhere): only two
+            # declared units that differ are a mismatch
+            if out_var.unit and in_var.unit and out_var.unit != in_var.unit:
                 raise ScenarioError(f"{what}: incompatible units {out_var.unit!r} -> {in_var.unit!r}")
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))

@@ -86,6 +86,8 @@ def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]
     from components.catalogue import FMUS
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
+    if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
+        return {name: scenario.fmu_files[name] for name in names}
     unknown = [n for n in names if n not in FMUS]
     if unknown:
         raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "

@@ -4,7 +4,8 @@ The archive holds SystemStructure.ssd at its root and the FMUs under resources/.
 lists its connectors (inputs and outputs, with units) and binds the scenario's parameter values
 inline (ssd:ParameterBindings / ssv:ParameterSet); the connections are the scenario's; the
 DefaultExperiment carries the start and stop time. The communication step is not part of SSP 1.0:
-a host takes it as its own setting (`sewfmu crosscheck` passes the scenario's).
+a host takes it as its own setting (`sewfmu crosscheck` passes the scenario's); sewfmu's own
+annotation in the DefaultExperiment carries it for `sewfmu run FILE.ssp`.
 """
 from __future__ import annotations
 
@@ -25,6 +26,9 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 # every component's inline parameter set carries this name, so that a host that applies one
 # named set to the whole system (ecos: init(parameter_set=...)) applies all of them
 PARAMETER_SET = "sewfmu"
+SEWFMU = "https://github.com/sewfmu/ssp-annotation"
+ANNOTATION = "org.sewfmu.experiment"
+ET.register_namespace("sewfmu", SEWFMU)
 ET.register_namespace("ssd", SSD)
 ET.register_namespace("ssc", SSC)
 ET.register_namespace("ssv", SSV)
@@ -78,8 +82,14 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     for name in sorted(used_units):
         unit = ET.SubElement(units, _q(SSC, "Unit"), {"name": name})
         ET.SubElement(unit, _q(SSC, "BaseUnit"), {k: str(v) for k, v in UNITS[name].items()})
-    ET.SubElement(root, _q(SSD, "DefaultExperiment"),
-                  {"startTime": "0", "stopTime": repr(scenario.end_time())})
+    experiment = ET.SubElement(root, _q(SSD, "DefaultExperiment"),
+                               {"startTime": "0", "stopTime": repr(scenario.end_time())})
+    # the communication step is not part of SSP 1.0: sewfmu's annotation carries it, and
+    # scenarios/ssp_import.py reads it back
+    notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
+    note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
+    ET.SubElement(note, _q(SEWFMU, "Experiment"), {"step": repr(scenario.step),
+                                                   "master": scenario.master})
     ET.indent(root)
     return ET.ElementTree(root)
 

@@ -1,0 +1,212 @@
+"""SSP systems from any SSP editor run as they are: sewfmu's own exports read back give the same
+figures; renamed components, another parameter-set name, a .ssv file and an FMU that sewfmu did
+not build run; broken SSP files get one clear line."""
+import json
+import re
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from scenarios.cli import main
+from scenarios.format import catalogue, load
+from scenarios.runner import export, simulate, summarize
+
+SKIP = ("scenario", "master", "step", "stop_time", "wall_time_s")
+
+
+@pytest.fixture(autouse=True)
+def _fmus(fmu_dir, monkeypatch):
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
+
+
+def _figures(scenario):
+    return {k: v for k, v in summarize(simulate(scenario)).items() if k not in SKIP}
+
+
+def _runs_of_catalogue():
+    """Every catalogue scenario as it runs (a [compare] scenario: its first variant)."""
+    out = []
+    for name in sorted(catalogue()):
+        sc = load(name)
+        if sc.compare:
+            sc.set_value(sc.compare["parameter"], sc.compare["values"][0])
+            sc.compare = None
+        out.append((name, sc))
+    return out
+
+
+@pytest.mark.parametrize("name, scenario", _runs_of_catalogue(), ids=lambda v: v
+                         if isinstance(v, str) else "")
+def test_an_exported_catalogue_scenario_read_back_gives_the_same_figures(tmp_path, name,
+                                                                          scenario):
+    ssp = export(scenario, tmp_path / f"{name}.ssp")
+    back = load(str(ssp))
+    assert back.analysis == scenario.analysis and back.step == scenario.step
+    assert _figures(back) == _figures(scenario)
+
+
+def _rewrite(ssp: Path, out: Path, edit, extra: dict[str, str] | None = None) -> Path:
+    """A copy of an .ssp with its SystemStructure.ssd edited and extra files added."""
+    with zipfile.ZipFile(ssp) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "SystemStructure.ssd":
+                data = edit(data.decode("utf-8")).encode("utf-8")
+            dst.writestr(item, data)
+        for name, text in (extra or {}).items():
+            dst.writestr(name, text)
+    return out
+
+
+SSV = """<?xml version="1.0" encoding="UTF-8"?>
+<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+    version="1.0" name="Variante A">
+  <ssv:Parameters>
+    <ssv:Parameter name="Stempel.F30"><ssv:Real value="5.0"/></ssv:Parameter>
+    <ssv:Parameter name="Stempel.c3"><ssv:Real value="200000"/></ssv:Parameter>
+  </ssv:Parameters>
+</ssv:ParameterSet>
+"""
+
+
+def test_renamed_components_a_named_parameter_set_and_an_ssv_file(tmp_path):
+    sc = load("punch_drive")
+    sc.revolutions = 3
+    sc.set_value("shaft.omega0", 200.0)
+    ssp = export(sc, tmp_path / "punch.ssp")
+
+    def edit(text):
+        for old, new in (("shaft", "Welle"), ("linkage", "Getriebe"), ("punch", "Stempel")):
+            text = re.sub(rf'"{old}"', f'"{new}"', text)
+        text = text.replace('name="sewfmu"', 'name="Betriebspunkt"')
+        # the punch (the last component) takes its parameters from a .ssv file, with a prefix
+        head, tail = text.rsplit("</ssd:Component>", 1)
+        return (head + '<ssd:ParameterBindings><ssd:ParameterBinding source="resources/'
+                'variante.ssv" prefix="Stempel."/></ssd:ParameterBindings></ssd:Component>'
+                + tail)
+
+    edited = _rewrite(ssp, tmp_path / "edited.ssp", edit, {"resources/variante.ssv": SSV})
+    back = load(str(edited))
+    assert set(back.instances) == {"Welle", "Getriebe", "Stempel"}
+    assert back.roles == {"shaft": "Welle", "linkage": "Getriebe", "punch": "Stempel"}
+    assert back.instances["Welle"].parameters == {"omega0": 200.0}
+    assert back.instances["Stempel"].parameters == {"F30": 5.0, "c3": 200000.0}
+    expected = load("punch_drive")
+    expected.revolutions = 3
+    for target, value in (("shaft.omega0", 200.0), ("punch.F30", 5.0), ("punch.c3", 2e5)):
+        expected.set_value(target, value)
+    assert _figures(back) == _figures(expected)
+
+
+DOUBLER = '''
+from pythonfmu import Fmi2Causality, Fmi2Slave, Real
+
+
+class Doubler(Fmi2Slave):
+    """Twice its input: an FMU that sewfmu did not build."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.u = 0.0
+        self.y = 0.0
+        self.register_variable(Real("u", causality=Fmi2Causality.input))
+        self.register_variable(Real("y", causality=Fmi2Causality.output))
+
+    def do_step(self, current_time, step_size):
+        self.y = 2.0 * self.u
+        return True
+'''
+
+SYSTEM = """<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+    xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="twice">
+  <ssd:System name="twice">
+    <ssd:Elements>
+      <ssd:Component name="motor" source="resources/MainShaft.fmu"
+          type="application/x-fmu-sharedlibrary"/>
+      <ssd:Component name="x2" source="resources/Doubler.fmu"
+          type="application/x-fmu-sharedlibrary"/>
+    </ssd:Elements>
+    <ssd:Connections>
+      <ssd:Connection startElement="motor" startConnector="omega" endElement="x2"
+          endConnector="u"/>
+    </ssd:Connections>
+  </ssd:System>
+  <ssd:DefaultExperiment startTime="0" stopTime="0.01"/>
+</ssd:SystemStructureDescription>
+"""
+
+
+def test_an_fmu_that_sewfmu_did_not_build_runs(tmp_path, fmu_paths):
+    (tmp_path / "Doubler.py").write_text(DOUBLER)
+    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", "Doubler.py", "-d",
+                    "built", "--no-external-tool"], cwd=tmp_path, check=True,
+                   capture_output=True, timeout=300)
+    ssp = tmp_path / "twice.ssp"
+    with zipfile.ZipFile(ssp, "w") as z:
+        z.writestr("SystemStructure.ssd", SYSTEM)
+        z.write(fmu_paths["MainShaft"], "resources/MainShaft.fmu")
+        z.write(tmp_path / "built" / "Doubler.fmu", "resources/Doubler.fmu")
+    out = tmp_path / "out"
+    assert main(["run", str(ssp), "--set", "experiment.step=1e-3", "--out", str(out)]) == 0
+    result = (out / "results.csv").read_text().splitlines()
+    header = result[0].split(",")
+    last = dict(zip(header, map(float, result[-1].split(","))))
+    assert last["x2.y"] == pytest.approx(2 * last["motor.omega"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["provenance"]["instances"]["x2"]["fmu"] == "Doubler"
+
+
+def _broken(tmp_path, edit=None, drop=None, raw=None):
+    sc = load("punch_drive")
+    sc.revolutions = 1
+    ssp = export(sc, tmp_path / "good.ssp")
+    if raw is not None:
+        (tmp_path / "bad.ssp").write_bytes(raw)
+        return tmp_path / "bad.ssp"
+    with zipfile.ZipFile(ssp) as src, zipfile.ZipFile(tmp_path / "bad.ssp", "w") as dst:
+        for item in src.infolist():
+            if drop and item.filename == drop:
+                continue
+            data = src.read(item)
+            if edit and item.filename == "SystemStructure.ssd":
+                data = edit(data.decode("utf-8")).encode("utf-8")
+            dst.writestr(item, data)
+    return tmp_path / "bad.ssp"
+
+
+@pytest.mark.parametrize("case, words", [
+    (dict(drop="resources/PunchContact.fmu"), ["component punch", "PunchContact.fmu",
+                                               "not in the archive"]),
+    (dict(edit=lambda t: t.replace('startConnector="xi"', 'startConnector="xii"')),
+     ["linkage", "has no output 'xii'"]),
+    (dict(edit=lambda t: t.replace('startElement="shaft" startConnector="phi"',
+                                   'startElement="shaft" startConnector="omega"')),
+     ["incompatible units", "rad/s", "rad"]),
+    (dict(edit=lambda t: t.replace("</ssd:System>", "</ssd:Sys>")), ["not well-formed XML"]),
+    (dict(drop="SystemStructure.ssd"), ["no SystemStructure.ssd"]),
+    (dict(raw=b"not a zip at all"), ["not an SSP archive"]),
+    (dict(edit=lambda t: re.sub(r'<ssd:DefaultExperiment[^>]*>', "<ssd:DefaultExperiment>", t)),
+     ["DefaultExperiment stopTime"]),
+    (dict(edit=lambda t: t.replace('endElement="punch"', 'endElement="ram"', 1)),
+     ["no component 'ram'"]),
+])
+def test_a_broken_ssp_gets_one_clear_line(tmp_path, capsys, case, words):
+    bad = _broken(tmp_path, **case)
+    assert main(["run", str(bad), "--out", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    for word in words:
+        assert word in err, err
+
+
+def test_an_ssp_without_a_step_asks_for_one(tmp_path, capsys):
+    bad = _broken(tmp_path, edit=lambda t: re.sub(r"<ssd:Annotations>.*?</ssd:Annotations>", "",
+                                                  t, flags=re.S))
+    assert main(["run", str(bad), "--out", str(tmp_path / "out")]) == 1
+    assert "--set experiment.step" in capsys.readouterr().err
+    assert main(["run", str(bad), "--set", "experiment.step=2.5e-4",
+                 "--out", str(tmp_path / "out")]) == 0
