@@ -91,7 +91,8 @@ class AdaptiveMaster(JacobiMaster):
                 switched = any(list(unit.bool_buf) != before
                                for unit, before in zip(self.instances, switches))
             except FMICallException as err:
-                if h <= self.h_min:
+                # after fmi2Fatal no call may follow, not even a rollback
+                if h <= self.h_min or any(unit.failed for unit in self.instances):
                     raise self._failure(err, f"from t = {t:g} to {t + h:g} s") from None
                 error, switched = math.inf, False          # refused: try a shorter step
             if (error <= 1.0 or h <= self.h_min) and (not switched or h <= self.h_event):
