@@ -94,14 +94,18 @@ class Scenario:
     record_every: int = 1             # record every n-th communication point (long runs)
     roles: dict[str, str] = field(default_factory=dict)   # the analysis's role -> instance
     tolerance: float | None = None          # iterative, adaptive masters; None: their default
+    tolerance_master: str | None = None     # the master a file's tolerance was given for
     acceleration: str = "aitken"                          # iterative master
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
 
     def coupling_tolerance(self) -> float:
-        """experiment.tolerance, or the master's default."""
-        return self.tolerance or DEFAULT_TOLERANCE.get(self.master, 1e-6)
+        """experiment.tolerance, or the master's default (a scenario file's tolerance belongs to
+        the file's master: run with another master, that master's default applies)."""
+        if self.tolerance and self.tolerance_master in (None, self.master):
+            return self.tolerance
+        return DEFAULT_TOLERANCE.get(self.master, 1e-6)
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
@@ -166,6 +170,7 @@ class Scenario:
             return
         if key == "tolerance":
             self.tolerance = _positive(value, f"{origin} experiment.tolerance")
+            self.tolerance_master = None          # given with --set: for whichever master runs
             return
         if key == "record_every":
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -347,6 +352,8 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     for key in ("record_every", "tolerance", "acceleration"):
         if key in exp:
             scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
+    if "tolerance" in exp:
+        scenario.tolerance_master = master
     for inst_name, spec in data["instances"].items():
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,

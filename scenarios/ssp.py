@@ -88,8 +88,12 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     # scenarios/ssp_import.py reads it back
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
-    ET.SubElement(note, _q(SEWFMU, "Experiment"), {"step": repr(scenario.step),
-                                                   "master": scenario.master})
+    settings = {"step": repr(scenario.step), "master": scenario.master}
+    if scenario.master in ("iterative", "adaptive"):
+        settings["tolerance"] = repr(scenario.coupling_tolerance())
+    if scenario.master == "iterative":
+        settings["acceleration"] = scenario.acceleration
+    ET.SubElement(note, _q(SEWFMU, "Experiment"), settings)
     ET.indent(root)
     return ET.ElementTree(root)
 

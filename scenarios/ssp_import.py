@@ -77,12 +77,14 @@ def load_ssp(path: Path) -> Scenario:
     connections = [_connection(c, instances, where)
                    for c in system.iterfind(f"{_q(SSD, 'Connections')}/{_q(SSD, 'Connection')}")]
     analysis, roles = _analysis_of({n: i.fmu for n, i in instances.items()})
-    step, master = _experiment(root)
+    experiment = _experiment(root)
     scenario = Scenario(
         name=path.stem, source=str(path), description=system.get("description", ""),
         analysis=analysis, instances=instances, connections=connections, record=None,
-        step=step, master=master, stop_time=_stop_time(root, where), revolutions=None,
-        shaft=None, compare=None, roles=roles)
+        step=experiment["step"], master=experiment["master"],
+        stop_time=_stop_time(root, where), revolutions=None, shaft=None, compare=None,
+        roles=roles, tolerance=experiment["tolerance"], acceleration=experiment["acceleration"],
+        tolerance_master=experiment["master"])
     scenario.fmu_files = files
     scenario.digest = hashlib.sha256(raw).hexdigest()
     _check_sources(scenario)
@@ -204,22 +206,25 @@ def _stop_time(root: ET.Element, where: str) -> float:
     return stop
 
 
-def _experiment(root: ET.Element) -> tuple[float, str]:
-    """The communication step and master from sewfmu's annotation: (0, "jacobi") where the file
-    gives none (the run then asks for --set experiment.step)."""
-    from .format import MASTERS
+def _experiment(root: ET.Element) -> dict:
+    """The communication step, master, tolerance and acceleration from sewfmu's annotation;
+    where the file gives no step, 0 (the run then asks for --set experiment.step)."""
+    from .format import ACCELERATIONS, MASTERS
 
-    step, master = 0.0, "jacobi"
+    found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken"}
     for note in root.iter(_q(SSC, "Annotation")):
         if note.get("type") == ANNOTATION:
             for element in note.iter():
-                try:
-                    step = float(element.get("step", step))
-                except ValueError:
-                    pass
+                for key in ("step", "tolerance"):
+                    try:
+                        found[key] = float(element.get(key, found[key]))
+                    except (TypeError, ValueError):
+                        pass
                 if element.get("master") in MASTERS:
-                    master = element.get("master")
-    return step, master
+                    found["master"] = element.get("master")
+                if element.get("acceleration") in ACCELERATIONS:
+                    found["acceleration"] = element.get("acceleration")
+    return found
 
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:

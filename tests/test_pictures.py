@@ -64,7 +64,9 @@ def test_the_animation_shows_the_recorded_run(tmp_path, name):
     phi = result.columns["shaft.phi"]
     step = np.diff(phi[anim.samples])
     assert phi[anim.samples[0]] >= phi[-1] - 2 * math.pi - 1e-9
-    assert np.all(step > 0) and np.ptp(step) < 0.2 * step.mean()
+    assert np.all(step >= 0)
+    if result.scenario.master != "adaptive":      # uniform samples: frames every 10°
+        assert np.all(step > 0) and np.ptp(step) < 0.2 * step.mean()
     for k in (0, 9, 18, 27):
         i = anim.samples[k]
         x, y = _recorded_point(name, result, i)

@@ -15,9 +15,10 @@ from scenarios.master import run
 from scenarios.runner import monolithic_summary, summarize
 
 
-def _split(fmu_paths, master="jacobi", step=None, **settings):
+def _split(fmu_paths, master=None, step=None, **settings):
+    """punch_split with its own master (adaptive), or the one given."""
     sc = load("punch_split")
-    sc.master = master
+    sc.master = master or sc.master
     if step:
         sc.step = step
     for target, value in settings.items():
@@ -33,9 +34,18 @@ def _errors(sc, result):
                                                      "F2_peak", "F2_weld_mean")}
 
 
-def test_punch_split_gives_the_monolithic_figures_at_the_default_setup(fmu_paths):
+@pytest.mark.parametrize("omega", [100.0, 300.0])
+def test_punch_split_gives_the_monolithic_figures_with_its_own_master(fmu_paths, omega):
     """The target: within 0.1° of the contact angles and 0.01 N of F2_weld_mean."""
-    sc, result = _split(fmu_paths)
+    sc, result = _split(fmu_paths, shaft__omega0=omega)
+    assert sc.master == "adaptive"
+    err = _errors(sc, result)
+    assert err["contact_onset_deg"] < 0.1 and err["contact_loss_deg"] < 0.1
+    assert err["F2_weld_mean"] < 0.01 and err["F2_peak"] < (0.01 if omega == 100.0 else 1.5)
+
+
+def test_punch_split_with_jacobi_at_the_default_step(fmu_paths):
+    sc, result = _split(fmu_paths, master="jacobi")
     err = _errors(sc, result)
     assert err["contact_onset_deg"] < 0.1 and err["contact_loss_deg"] < 0.1
     assert err["F2_weld_mean"] < 0.01 and err["F2_peak"] < 0.1
@@ -48,7 +58,7 @@ def test_punch_split_gives_the_monolithic_figures_at_the_default_setup(fmu_paths
 ])
 def test_punch_split_follows_the_monolithic_solution_elsewhere(fmu_paths, settings, step, angle,
                                                                force):
-    sc, result = _split(fmu_paths, step=step, **settings)
+    sc, result = _split(fmu_paths, master="jacobi", step=step, **settings)
     err = _errors(sc, result)
     assert err["contact_onset_deg"] < angle and err["contact_loss_deg"] < angle, err
     assert err["F2_weld_mean"] < force, err
@@ -72,7 +82,7 @@ def test_a_step_that_does_not_converge_is_reported(fmu_paths, monkeypatch):
 
 
 def test_plain_jacobi_diverges_where_the_iterative_master_stays_stable(fmu_paths):
-    _, jacobi = _split(fmu_paths, step=2e-3)
+    _, jacobi = _split(fmu_paths, master="jacobi", step=2e-3)
     assert not np.max(jacobi["fabric.F2"]) < 1e3            # the explicit coupling's limit
     sc, iterative = _split(fmu_paths, master="iterative", step=2e-3)
     assert np.max(iterative["fabric.F2"]) < 100.0

@@ -56,7 +56,10 @@ def frame_samples(phi: np.ndarray, frames: int = FRAMES) -> list[int]:
     targets = end - 2 * math.pi + 2 * math.pi * np.arange(frames) / frames
     idx = np.clip(np.searchsorted(phi, targets), 1, len(phi) - 1)
     nearer_left = (targets - phi[idx - 1]) < (phi[idx] - targets)
-    return [int(i) for i in np.where(nearer_left, idx - 1, idx)]
+    # within the revolution: with non-uniform samples (the adaptive master) the nearest sample to
+    # its first angle may lie before it
+    inside = phi[idx - 1] >= end - 2 * math.pi - 1e-12
+    return [int(i) for i in np.where(nearer_left & inside, idx - 1, idx)]
 
 
 def can_animate(scenario) -> bool:
