@@ -23,7 +23,7 @@ import math
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
-from .coupling import LoopStates
+from .coupling import SavedStates, rate_chains
 from .master import JacobiMaster, RunResult
 
 GROWTH = 4.0
@@ -44,9 +44,9 @@ class AdaptiveMaster(JacobiMaster):
         self.h_min, self.h_max = nominal * MIN_FRACTION, nominal * MAX_FACTOR
         self.h_event = nominal * EVENT_FRACTION
         self.t = 0.0
-        self.states = LoopStates(self.instances)
-        self.chains = self._extrapolated_chains()
-        self.scale = np.array([abs(unit.in_buf[k0]) for unit, k0, *_ in self.chains])
+        self.states = SavedStates(self.instances)
+        self.chains = rate_chains(self.instances)
+        self.scale = np.array([abs(c.unit.in_buf[c.value]) for c in self.chains])
         self.rejected = 0
         self.times: list[float] = [0.0]
         self.rows: list[np.ndarray] = [self._data[0].copy()]
@@ -58,19 +58,6 @@ class AdaptiveMaster(JacobiMaster):
                 if v.causality == "output" and v.type == "Boolean":
                     unit.want_output(v.name, f"{unit.name}.{v.name}")
         return super()._plan(units)
-
-    def _extrapolated_chains(self) -> list[tuple]:
-        """(unit, index of X, of X_dot, of X_ddot or None, source, index of the source's X) for
-        every connected input X whose rate X_dot is connected too."""
-        chains = []
-        for unit in self.instances:
-            names = [name for name, _, _ in unit.inputs]
-            for k, (name, src, out) in enumerate(unit.inputs):
-                if f"{name}_dot" in names:
-                    k2 = names.index(f"{name}_ddot") if f"{name}_ddot" in names else None
-                    chains.append((unit, k, names.index(f"{name}_dot"), k2, src,
-                                   src.real_out.index(out)))
-        return chains
 
     def finished(self) -> bool:
         return self.t >= self.stop * (1 - 1e-12)
@@ -105,8 +92,8 @@ class AdaptiveMaster(JacobiMaster):
                 h = max(self.h_min, h * max(SHRINK, SAFETY * error ** (-1 / 3)))
         self.t = t + h if t + h < self.stop * (1 - 1e-12) else self.stop
         self.k += 1
-        self.scale = np.maximum(self.scale, [abs(src.out_buf[idx])
-                                             for *_, src, idx in self.chains])
+        self.scale = np.maximum(self.scale, [abs(c.source.out_buf[c.output])
+                                             for c in self.chains])
         growth = GROWTH if error == 0.0 else min(GROWTH, SAFETY * error ** (-1 / 3))
         self.h = min(self.h_max, max(self.h_min, h * max(growth, SHRINK)))
         if self.k % self.every == 0 or self.finished():      # experiment.record_every
@@ -119,11 +106,11 @@ class AdaptiveMaster(JacobiMaster):
         """The largest extrapolation error of the step, relative to tolerance × amplitude."""
         worst = 0.0
         tolerance = self.scenario.coupling_tolerance()
-        for j, (unit, k0, k1, k2, src, idx) in enumerate(self.chains):
-            values = inputs[self.instances.index(unit)]
-            predicted = values[k0] + h * (values[k1] + (0.5 * h * values[k2] if k2 is not None
-                                                          else 0.0))
-            actual = src.out_buf[idx]
+        for j, c in enumerate(self.chains):
+            values = inputs[c.position]
+            predicted = values[c.value] + h * (values[c.rate] + (
+                0.5 * h * values[c.second] if c.second is not None else 0.0))
+            actual = c.source.out_buf[c.output]
             scale = max(self.scale[j], abs(actual), 1e-300)
             worst = max(worst, abs(actual - predicted) / (tolerance * scale))
         return worst

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+from typing import NamedTuple
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
@@ -65,8 +66,8 @@ class Acceleration:
         return given[-1] + W @ alpha
 
 
-class LoopStates:
-    """Saved FMU states of the loop's instances (raw FMI calls: fmpy's wrapper costs µs)."""
+class SavedStates:
+    """Saved FMU states of some instances (raw FMI calls: fmpy's wrapper costs µs)."""
 
     def __init__(self, units):
         self.units = units
@@ -97,17 +98,30 @@ class LoopStates:
                     pass
 
 
-def interpolated_inputs(loop_units) -> list[tuple]:
-    """(unit, index of X, index of X_dot, source unit, index of the source's X output) for every
-    input X with a rate input X_dot, both fed from the loop."""
-    found = []
-    for unit in loop_units:
+class RateChain(NamedTuple):
+    """A connected input X that comes with its rate X_dot (and X_ddot) on the same FMU: the FMU
+    extrapolates X within a step from them."""
+    position: int          # of the FMU in the list the chains were found in
+    unit: object           # the FmuInstance
+    value: int             # index of X in the FMU's connected inputs
+    rate: int              # of X_dot
+    second: int | None     # of X_ddot, if connected
+    source: object         # the FmuInstance that gives X
+    output: int            # index of X in the source's Real outputs
+
+
+def rate_chains(units) -> list[RateChain]:
+    """Every rate-paired input of the given FMUs (the iterative master interpolates them, the
+    adaptive master measures their extrapolation error)."""
+    chains = []
+    for position, unit in enumerate(units):
         names = [name for name, _, _ in unit.inputs]
         for k, (name, src, out) in enumerate(unit.inputs):
-            rate = f"{name}_dot"
-            if rate in names and src in loop_units:
-                found.append((unit, k, names.index(rate), src, src.real_out.index(out)))
-    return found
+            if f"{name}_dot" in names:
+                second = names.index(f"{name}_ddot") if f"{name}_ddot" in names else None
+                chains.append(RateChain(position, unit, k, names.index(f"{name}_dot"), second,
+                                        src, src.real_out.index(out)))
+    return chains
 
 
 def converged(r: np.ndarray, given: np.ndarray, tolerance: float) -> bool:
@@ -132,8 +146,9 @@ class IterativeMaster(JacobiMaster):
                       and any(reaches(u, member) for member in loop)]
         self.before = [u for u in self.instances if u not in loop and u not in downstream]
         self.loop, self.after = loop, downstream
-        self.pairs = interpolated_inputs(loop)
-        self.loop_states = LoopStates(loop) if self.pairs else None
+        # the inputs interpolated over a step: those fed from the loop itself
+        self.pairs = [c for c in rate_chains(loop) if c.source in loop]
+        self.loop_states = SavedStates(loop) if self.pairs else None
         self.acceleration = Acceleration(self.scenario.acceleration)
         self.iterations = 0            # passes over all steps
         self.unconverged: list[tuple[float, float]] = []   # (t, largest |residual|)
@@ -153,8 +168,8 @@ class IterativeMaster(JacobiMaster):
             unit.read_outputs()
         self.loop_states.save()
         inputs_at_t = [list(unit.in_buf) for unit in self.loop]
-        start = np.array([unit.in_buf[k] for unit, k, _, _, _ in self.pairs])
-        rate = np.array([unit.in_buf[kd] for unit, _, kd, _, _ in self.pairs])
+        start = np.array([c.unit.in_buf[c.value] for c in self.pairs])
+        rate = np.array([c.unit.in_buf[c.rate] for c in self.pairs])
         assumed = start + rate * h          # the explicit coupling's own guess
         self.acceleration.start()
         for iteration in range(MAX_ITERATIONS):
@@ -162,13 +177,13 @@ class IterativeMaster(JacobiMaster):
                 self.loop_states.restore()
             for unit, saved in zip(self.loop, inputs_at_t):
                 unit.in_buf[:] = saved
-            for j, (unit, k, kd, _, _) in enumerate(self.pairs):
-                unit.in_buf[kd] = (assumed[j] - start[j]) / h
+            for j, c in enumerate(self.pairs):
+                c.unit.in_buf[c.rate] = (assumed[j] - start[j]) / h
             for unit in self.loop:
                 unit.set_inputs()
                 unit.do_step(t, h)
             self.exchange(self.loop)
-            given = np.array([src.out_buf[idx] for _, _, _, src, idx in self.pairs])
+            given = np.array([c.source.out_buf[c.output] for c in self.pairs])
             residual = given - assumed
             self.iterations += 1
             if converged(residual, given, self.scenario.coupling_tolerance()):
