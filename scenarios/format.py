@@ -118,9 +118,8 @@ class Scenario:
         from components.parameters import ParameterError, with_values
         from components.shaft import MainShaft, ShaftParams
 
-        if self.shaft is None:        # revolutions set later (--set): the shaft as from_dict finds it
-            shafts = [n for n, inst in self.instances.items() if inst.fmu == "MainShaft"]
-            self.shaft = self.roles.get("shaft") or (shafts[0] if len(shafts) == 1 else None)
+        if self.shaft is None:        # revolutions set later (--set)
+            self.shaft = self.default_shaft()
         if self.shaft not in self.instances:
             raise ScenarioError(f"{self.source}: experiment.revolutions needs the MainShaft "
                                 f"instance whose turns are counted (experiment.shaft), or give "
@@ -131,6 +130,12 @@ class Scenario:
         except ParameterError as err:
             raise ScenarioError(f"{self.source}: {self.shaft}: {err}") from None
         return MainShaft(params).time_of_angle(2 * math.pi * self.revolutions)
+
+    def default_shaft(self) -> str | None:
+        """The MainShaft whose revolutions count when experiment.shaft names none: the
+        analysis's shaft, or the only MainShaft."""
+        shafts = [n for n, inst in self.instances.items() if inst.fmu == "MainShaft"]
+        return self.roles.get("shaft") or (shafts[0] if len(shafts) == 1 else None)
 
     def set_value(self, target: str, value: Any, origin: str = "--set") -> None:
         """Apply `instance.parameter = value` (or `experiment.key = value`)."""
@@ -156,17 +161,12 @@ class Scenario:
         self.instances[inst].parameters[key] = value
 
     def _set_experiment(self, key: str, value: Any, origin: str) -> None:
-        if key == "master":
-            if value not in MASTERS:
-                raise ScenarioError(f"{origin} experiment.master: must be one of {MASTERS}, "
+        choices = {"master": MASTERS, "acceleration": ACCELERATIONS}
+        if key in choices:
+            if value not in choices[key]:
+                raise ScenarioError(f"{origin} experiment.{key}: must be one of {choices[key]}, "
                                     f"got {value!r}")
-            self.master = value
-            return
-        if key == "acceleration":
-            if value not in ACCELERATIONS:
-                raise ScenarioError(f"{origin} experiment.acceleration: must be one of "
-                                    f"{ACCELERATIONS}, got {value!r}")
-            self.acceleration = value
+            setattr(self, key, value)
             return
         if key == "tolerance":
             self.tolerance = _positive(value, f"{origin} experiment.tolerance")
@@ -360,10 +360,8 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
                                origin=f"{source}: instances.{inst_name}.parameters")
     scenario.roles = _bind_roles(data, instances, source)
     if scenario.revolutions is not None:
-        if scenario.shaft is None:         # the analysis's shaft, or the only MainShaft
-            shafts = [n for n, inst in instances.items() if inst.fmu == "MainShaft"]
-            scenario.shaft = scenario.roles.get("shaft") or (shafts[0] if len(shafts) == 1
-                                                             else None)
+        if scenario.shaft is None:
+            scenario.shaft = scenario.default_shaft()
         if scenario.shaft not in instances:
             raise ScenarioError(f"{source}: experiment.shaft must name the MainShaft instance "
                                 f"whose revolutions are counted, got {scenario.shaft!r}")
@@ -374,22 +372,26 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     connections = data.get("connections", [])
     if not isinstance(connections, list):
         raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
-    sources: dict[tuple[str, str], Connection] = {}
-    for text in connections:
-        con = _parse_connection(text, instances, source)
-        other = sources.get((con.dst, con.dst_var))
-        if other is not None:      # FMI inputs take one value: a second source would silently win
-            raise ScenarioError(f"{source}: connections: input {con.dst}.{con.dst_var} has two "
-                                f"sources, {other.src}.{other.src_var} and "
-                                f"{con.src}.{con.src_var}; an input takes one")
-        sources[(con.dst, con.dst_var)] = con
-        scenario.connections.append(con)
+    scenario.connections = [_parse_connection(text, instances, source) for text in connections]
+    check_one_source(scenario.connections, source)
     _check_record(scenario.record, source)
     if scenario.compare is not None:
         _check_compare(scenario, source)
     if scenario.sweep is not None:
         _check_sweep(scenario.sweep, source)
     return scenario
+
+
+def check_one_source(connections: list[Connection], source: str) -> None:
+    """FMI inputs take one value: a second source into an input would silently win."""
+    sources: dict[tuple[str, str], Connection] = {}
+    for con in connections:
+        other = sources.get((con.dst, con.dst_var))
+        if other is not None:
+            raise ScenarioError(f"{source}: connections: input {con.dst}.{con.dst_var} has two "
+                                f"sources, {other.src}.{other.src_var} and "
+                                f"{con.src}.{con.src_var}; an input takes one")
+        sources[(con.dst, con.dst_var)] = con
 
 
 def _check_record(record: Any, source: str) -> None:

@@ -23,7 +23,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from .format import Connection, Instance, Scenario, ScenarioError
+from .format import Connection, Instance, Scenario, ScenarioError, check_one_source
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -87,7 +87,7 @@ def load_ssp(path: Path) -> Scenario:
         tolerance_master=experiment["master"])
     scenario.fmu_files = files
     scenario.digest = hashlib.sha256(raw).hexdigest()
-    _check_sources(scenario)
+    check_one_source(connections, where)
     return scenario
 
 
@@ -237,13 +237,3 @@ def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
         except RoleError:
             continue
     return None, {}
-
-
-def _check_sources(scenario: Scenario) -> None:
-    seen = {}
-    for con in scenario.connections:
-        key = (con.dst, con.dst_var)
-        if key in seen:
-            raise ScenarioError(f"{scenario.source}: connections: input {con.dst}.{con.dst_var} "
-                                f"has two sources, {seen[key]} and {con.src}.{con.src_var}")
-        seen[key] = f"{con.src}.{con.src_var}"
