@@ -20,7 +20,7 @@ import re
 import shutil
 from pathlib import Path
 
-_DEBRIS = re.compile(r"^\..+\.(\d+)\.(tmp|partial|old)$")
+_DEBRIS = re.compile(r"^\..+\.(\d+)\.(tmp|partial)$")
 
 
 class OutputError(ValueError):

@@ -105,14 +105,6 @@ def unit_of(figure: str) -> str:
     return ""
 
 
-def figures_section(title: str, figures: dict, skip=("scenario", "master", "provenance")) -> Section:
-    section = Section(title)
-    rows = [[k, v, unit_of(k)] for k, v in figures.items()
-            if k not in skip and not isinstance(v, (dict, list))]
-    section.table(["figure", "value", "unit"], rows, numeric={1})
-    return section
-
-
 def provenance_sections(provenance: dict) -> list[Section]:
     """What was run: the scenario, master, step, versions; every parameter (the scenario's own
     values in bold)."""

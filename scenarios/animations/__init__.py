@@ -113,6 +113,14 @@ def animate(result, path: Path) -> Animation:
                      tracked)
 
 
+def reach(joints_at, samples, margin: float) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The drawing's limits: the box of every joint over (90 of) the samples, with a margin.
+    `joints_at(i)` gives the joints (x, y) at sample i."""
+    points = [xy for i in samples[:: max(1, len(samples) // 90)] for xy in joints_at(i).values()]
+    xs, ys = [p[0] for p in points], [p[1] for p in points]
+    return (min(xs) - margin, max(xs) + margin), (min(ys) - margin, max(ys) + margin)
+
+
 def angle_label(result, i: int) -> str:
     """Crank angle within the last revolution and the time of sample i."""
     phi = analyses.column(result, "shaft", "phi")

@@ -8,7 +8,7 @@ from components.feed import FeedLinkage, FeedParams
 from components.parameters import with_values
 
 from .. import analyses
-from . import angle_label
+from . import angle_label, reach
 
 MM = 1e3
 CHAINS = (("A", "B", "C", "D"), ("D", "E"), ("E", "F", "H", "G"), ("G", "N", "K", "A"), ("H", "M"))
@@ -24,11 +24,7 @@ class Scene:
         self.mx = analyses.column(result, "feed", "M_x") * MM
         self.my = analyses.column(result, "feed", "M_y") * MM
         self.last = analyses.last_revolution(result).nonzero()[0]
-        pts = [xy for k in self.last[:: max(1, len(self.last) // 90)]
-               for xy in self._joints(k).values()]
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-        self.xlim = (min(xs) - 12.0, max(xs) + 12.0)
-        self.ylim = (min(ys) - 12.0, max(ys) + 12.0)
+        self.xlim, self.ylim = reach(self._joints, self.last, 12.0)
         self.inset = None
 
     def _joints(self, i: int) -> dict[str, tuple[float, float]]:

@@ -7,7 +7,7 @@ from components.parameters import with_values
 from components.takeup import TakeupLinkage, TakeupParams
 
 from .. import analyses
-from . import angle_label
+from . import angle_label, reach
 
 MM = 1e3
 
@@ -23,11 +23,7 @@ class Scene:
         self.ez = analyses.column(result, "takeup", "E_z") * MM
         self.ex = analyses.column(result, "takeup", "E_x") * MM
         self.last = analyses.last_revolution(result).nonzero()[0]
-        pts = [xy for k in self.last[:: max(1, len(self.last) // 90)]
-               for xy in self._joints(k).values()]
-        xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-        self.xlim = (min(xs) - 8.0, max(xs) + 8.0)
-        self.ylim = (min(ys) - 8.0, max(ys) + 8.0)
+        self.xlim, self.ylim = reach(self._joints, self.last, 8.0)
 
     def _joints(self, i: int) -> dict[str, tuple[float, float]]:
         m, p = self.model.motion(self.phi[i]), self.model.p
