@@ -107,6 +107,16 @@ class Scenario:
             return self.tolerance
         return DEFAULT_TOLERANCE.get(self.master, 1e-6)
 
+    def master_settings(self) -> dict[str, Any]:
+        """The settings its master uses besides the step: the tolerance of the iterative and the
+        adaptive master, the iterative master's acceleration."""
+        settings: dict[str, Any] = {}
+        if self.master in DEFAULT_TOLERANCE:
+            settings["tolerance"] = self.coupling_tolerance()
+        if self.master == "iterative":
+            settings["acceleration"] = self.acceleration
+        return settings
+
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
 

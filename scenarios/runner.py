@@ -21,6 +21,10 @@ from .master import RunResult, run
 from .outputs import replacing, write_atomic
 
 
+# the analyses whose scenarios the monolithic solution (scenarios/punch_monolithic.py) solves
+MONOLITHIC = ("punch", "punch_split")
+
+
 def _feed_headline(study: dict) -> dict:
     amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
                                                  if r["assembles"] else "cannot assemble")
@@ -155,9 +159,7 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     return {"scenario": {"name": scenario.name, "source": scenario.source,
                          "sha256": scenario.digest or None},
             "instances": instances, "master": scenario.master, "step": scenario.step,
-            **({"tolerance": scenario.coupling_tolerance()}
-               if scenario.master in ("iterative", "adaptive") else {}),
-            **({"acceleration": scenario.acceleration} if scenario.master == "iterative" else {}),
+            **scenario.master_settings(),
             "end_time": scenario.end_time(), "sewfmu": VERSION,
             "fmus": {fmu: md.version for fmu, md in sorted(described.items())}}
 
@@ -174,9 +176,9 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
                  report: bool = False) -> dict:
     """Run (each variant of) a scenario into out_dir; return the summary written there.
 
-    Every run of the scenario is done before out_dir is touched, and out_dir is then replaced
-    whole (outputs.replacing): a failed or interrupted run leaves the previous results as they
-    were. `progress(label, done, total)` hears of each run's steps. `animate` adds a GIF of each
+    Every run of the scenario is done before out_dir is touched, and what it writes then takes
+    the place of what the previous run wrote (outputs.replacing): a failed or interrupted run
+    leaves the previous results as they were. `progress(label, done, total)` hears of each run's steps. `animate` adds a GIF of each
     run of a mechanism; `report` a self-contained report.html (with the plots, the animations
     and, for the punch drive, the comparison with the monolithic solution)."""
     from . import animations
@@ -194,7 +196,7 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
     else:
         summary = runs[0][2]
     against_monolithic = {}
-    if report and scenario.analysis in ("punch", "punch_split"):
+    if report and scenario.analysis in MONOLITHIC:
         for label, result, own in runs:
             against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0])
     with replacing(out_dir) as staging:
@@ -234,7 +236,7 @@ def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, ob
 def monolithic_summary(scenario: Scenario, rtol: float | None = None) -> tuple[dict, float]:
     """Key figures of the monolithic solution (the punch drive as one ODE, DOP853, tight
     tolerances, or `rtol` with atol = rtol/1000) and its wall time."""
-    if scenario.analysis not in ("punch", "punch_split"):
+    if scenario.analysis not in MONOLITHIC:
         raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
     from . import punch_monolithic

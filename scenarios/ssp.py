@@ -88,12 +88,9 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     # scenarios/ssp_import.py reads it back
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
-    settings = {"step": repr(scenario.step), "master": scenario.master}
-    if scenario.master in ("iterative", "adaptive"):
-        settings["tolerance"] = repr(scenario.coupling_tolerance())
-    if scenario.master == "iterative":
-        settings["acceleration"] = scenario.acceleration
-    ET.SubElement(note, _q(SEWFMU, "Experiment"), settings)
+    settings = {"step": scenario.step, "master": scenario.master, **scenario.master_settings()}
+    ET.SubElement(note, _q(SEWFMU, "Experiment"),
+                  {k: repr(v) if isinstance(v, float) else v for k, v in settings.items()})
     ET.indent(root)
     return ET.ElementTree(root)
 
