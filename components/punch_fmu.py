@@ -5,10 +5,12 @@ from __future__ import annotations
 import math
 
 from .fmi_base import LinkageSlave, Port, SewSlave, fields_of
-from .punch_contact import PunchContact, PunchContactParams, PunchState
+from .punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 from .punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams
 
+_SETUP_HEIGHT = PunchLinkageParams().xi0    # the punch at the top of the setup position
+_BODY = PunchBodyParams()                    # the defaults the Fabric's start values assume
 SETUP_SPEED = 100.0         # rad/s: the punch drive's default shaft speed (the paper's first case)
 
 
@@ -131,15 +133,16 @@ class FabricSlave(SewSlave):
     model_name = "Fabric"
     params_class = FabricParams
     model_class = Fabric
-    # the punch at the setup position: at rest at the top, accelerated down by spring 6 (the
-    # default PunchBody's initial y''); run alone, the inputs extrapolate that fall, and the
-    # punch lands after 4.4 ms and presses into the fabric
+    # the punch at the setup position: at rest at the top (y = xi0, spring 11 unloaded),
+    # accelerated down by spring 6 (the default PunchBody's initial y''); run alone, the inputs
+    # extrapolate that fall, and the punch lands after 4.4 ms and presses into the fabric
     inputs = (
-        Port("y", "m", "punch height above the fabric (< 0: pressing into it)", start=4.5e-3),
+        Port("y", "m", "punch height above the fabric (< 0: pressing into it)",
+             start=_SETUP_HEIGHT),
         Port("y_dot", "m/s", "punch velocity"),
         Port("y_ddot", "m/s2", "punch acceleration: the punch's motion is extrapolated within a "
                                "step to locate contact inside it",
-             start=-(20.0 + 2000.0 * 4.5e-3) / 0.063 - 9.81),
+             start=(_BODY.F30 - _BODY.F10 - _BODY.c1 * _SETUP_HEIGHT) / _BODY.m - GRAVITY),
     )
     taylor_inputs = (("y", "y_dot", "y_ddot"),)
     experiment = (0.01, 1e-4)
