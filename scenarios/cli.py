@@ -96,9 +96,8 @@ def cmd_compare(args) -> None:
     print(f"  {'figure':22s} {'co-simulation':>14s} {loose:>14s} {'tight':>14s} "
           f"{'co-sim error':>13s} {loose + ' error':>17s}")
     for key, a, c, b, ea, ec in rows:
-        errors = "".join(f" {_fmt(e) if e is not None else '':>13s}" for e in (ea,)) + \
-            f" {_fmt(ec) if ec is not None else '':>17s}"
-        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(c):>14s} {_fmt(b):>14s}{errors}")
+        print(f"  {key:22s} {_cell(a, 14)} {_cell(c, 14)} {_cell(b, 14)} {_cell(ea, 13)} "
+              f"{_cell(ec, 17)}")
 
 
 def cmd_sweep(args) -> None:
@@ -189,7 +188,12 @@ def _print_side_by_side(rows, left: str, right: str) -> None:
     """Rows (figure, left value, right value, difference) as an aligned table."""
     print(f"  {'figure':22s} {left:>14s} {right:>14s} {'difference':>12s}")
     for key, a, b, d in rows:
-        print(f"  {key:22s} {_fmt(a):>14s} {_fmt(b):>14s} {_fmt(d) if d is not None else '':>12s}")
+        print(f"  {key:22s} {_cell(a, 14)} {_cell(b, 14)} {_cell(d, 12)}")
+
+
+def _cell(value, width: int) -> str:
+    """A value right-aligned in its column; nothing for a difference that has none."""
+    return f"{_fmt(value) if value is not None else '':>{width}s}"
 
 
 def _fmt(value) -> str:
@@ -217,8 +221,9 @@ def main(argv=None) -> int:
                        help="override a parameter (or experiment.step, experiment.master, ...)")
         p.set_defaults(func=func)
         if name == "compare":
-            p.add_argument("--rtol", type=_positive_number, help="also run the monolithic solver at this "
-                           "relative tolerance, both against a tight monolithic solution")
+            p.add_argument("--rtol", type=_positive_number,
+                           help="also run the monolithic solver at this relative tolerance, "
+                                "both against a tight monolithic solution")
         if name == "run":
             p.add_argument("--out", help="output folder (default: results/SCENARIO/)")
             p.add_argument("--plot", action="store_true", help="write PNG figures")
