@@ -11,25 +11,23 @@ import time
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave
 
 from components.build import ensure_built
 from components.catalogue import FMUS
-from scenarios.master import LogCollector, extracted_fmu, instantiate, release
+from scenarios.master import FmuInstance, LogCollector, extracted_fmu
 
 
 def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str]:
     """A fresh instance, `values` set during initialization, one doStep(0, h), timed."""
     unzip_dir, md = extracted_fmu(path)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
     log = LogCollector()
-    instantiate(fmu, log)
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    if values:
-        fmu.setReal([vr[k] for k in values], list(values.values()))
+    unit = FmuInstance(name, unzip_dir, md, log)
+    unit.prepare()
+    unit.instantiate()
+    fmu = unit.fmu
+    unit.enter_initialization(stop=h)
+    for key, value in values.items():
+        unit.set_parameter(unit.variables[key], value)
     fmu.exitInitializationMode()
     started = time.perf_counter()
     try:
@@ -39,7 +37,7 @@ def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str
         status = "Discard"
     wall = time.perf_counter() - started
     reason = log.lines[-1].split(": ", 1)[-1] if status != "OK" else ""
-    release(fmu)
+    unit.release()
     return status, wall, reason
 
 

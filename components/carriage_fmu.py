@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
-from .fmi_base import LinkageSlave, Port, SewSlave
+from .slave import LinkageSlave, Port, SewSlave
 
 SPEED = 1600 * 2 * math.pi / 60          # the semi-automat's 1600 stitches/min, in rad/s
 

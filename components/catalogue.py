@@ -12,3 +12,6 @@ FMUS: dict[str, tuple[str, str]] = {
     "CarriageModal": ("carriage_fmu", "CarriageModalSlave"),
 }
 
+
+# the FMI versions each of them is built for (`sewfmu build --fmi 3`: fmus/fmi3/)
+FMI_VERSIONS = (2, 3)

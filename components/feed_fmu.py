@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 from .feed import FeedLinkage, FeedParams
-from .fmi_base import LinkageSlave, Port
+from .slave import LinkageSlave, Port
 
 
 def _out(name: str, unit: str, description: str, source: str) -> Port:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from .fmi_base import LinkageSlave, Port, SewSlave, fields_of
+from .slave import LinkageSlave, Port, SewSlave, fields_of
 from .punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 from .punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams

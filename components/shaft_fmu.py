@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from .fmi_base import Port, SewSlave
+from .slave import Port, SewSlave
 from .shaft import MainShaft, ShaftParams
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from .fmi_base import LinkageSlave, Port
+from .slave import LinkageSlave, Port
 from .takeup import TakeupLinkage, TakeupParams
 
 SPEED = 5000 * 2 * math.pi / 60          # the paper's 5000 rpm, in rad/s

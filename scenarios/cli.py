@@ -23,7 +23,8 @@ def _load_with_sets(name: str, sets: list[str]):
 def cmd_build(args) -> None:
     from components.build import build_all, default_fmu_dir
 
-    for path in build_all(Path(args.dest) if args.dest else default_fmu_dir()):
+    dest = default_fmu_dir(args.fmi, Path(args.dest) if args.dest else None)
+    for path in build_all(dest, fmi=args.fmi):
         print(path)
 
 
@@ -142,8 +143,11 @@ def cmd_references(args) -> None:
     from . import regression as references
     from .runner import fmus_for_names
 
-    paths = fmus_for_names(list(FMUS))
+    paths = fmus_for_names(list(FMUS), fmi=args.fmi)
     if args.regenerate:
+        if args.fmi != 2:
+            raise ScenarioError("--regenerate: the references are made with the FMI 2.0 FMUs "
+                                "(the FMI 3.0 ones are checked against the same references)")
         for folder in references.regenerate(paths):
             print(f"wrote {folder}")
         return
@@ -152,7 +156,7 @@ def cmd_references(args) -> None:
         print(line)
     if problems:
         raise ScenarioError(f"{len(problems)} differences from the regression references")
-    print(f"all {len(FMUS)} FMUs match their references")
+    print(f"all {len(FMUS)} FMI {args.fmi}.0 FMUs match their references")
 
 
 def cmd_host_env(args) -> None:
@@ -204,11 +208,13 @@ def _fmt(value) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="sewfmu", description="Sewing-machine mechanisms as "
-                                     "FMI 2.0 co-simulation FMUs, and scenarios that connect them.")
+                                     "FMI 2.0 and 3.0 co-simulation FMUs, and scenarios that connect them.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("build", help="build every FMU into fmus/")
-    p.add_argument("--dest", help="output folder (default: fmus/)")
+    p = sub.add_parser("build", help="build every FMU into fmus/ (FMI 3.0: fmus/fmi3/)")
+    p.add_argument("--dest", help="output folder (default: fmus/; with --fmi 3 its fmi3/)")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                   help="FMI version of the FMUs (default 2)")
     p.set_defaults(func=cmd_build)
     p = sub.add_parser("list", help="components and scenarios, one line each")
     p.set_defaults(func=cmd_list)
@@ -248,6 +254,8 @@ def main(argv=None) -> int:
     p = sub.add_parser("references", help="check every FMU against its regression reference")
     p.add_argument("--regenerate", action="store_true",
                    help="rewrite the references from the current FMUs (deliberately)")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                   help="check the FMUs of this FMI version (default 2)")
     p.set_defaults(func=cmd_references)
     p = sub.add_parser("host-env", help="the environment a non-Python FMI host needs")
     p.add_argument("--check", action="store_true",

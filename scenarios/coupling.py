@@ -25,7 +25,6 @@ from typing import NamedTuple
 
 import numpy as np
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import fmi2FMUstate
 
 from .master import JacobiMaster, RunResult, reaches
 
@@ -71,9 +70,8 @@ class SavedStates:
 
     def __init__(self, units):
         self.units = units
-        self.states = [fmi2FMUstate() for _ in units]
-        self.raw = [(u.fmu._functions["fmi2GetFMUstate"], u.fmu._functions["fmi2SetFMUstate"],
-                     u.fmu._functions["fmi2FreeFMUstate"]) for u in units]
+        self.states = [ctypes.c_void_p() for _ in units]      # fmi2FMUstate, fmi3FMUState
+        self.raw = [u.raw_state_calls() for u in units]
 
     def save(self) -> None:
         for unit, state, (get, _, free) in zip(self.units, self.states, self.raw):
@@ -81,13 +79,13 @@ class SavedStates:
                 free(unit.component, ctypes.byref(state))
             status = get(unit.component, ctypes.byref(state))
             if status > 1:
-                unit._check("fmi2GetFMUstate", status)
+                unit._check("get_state", status)
 
     def restore(self) -> None:
         for unit, state, (_, set_state, _) in zip(self.units, self.states, self.raw):
             status = set_state(unit.component, state)
             if status > 1:
-                unit._check("fmi2SetFMUstate", status)
+                unit._check("set_state", status)
 
     def free(self) -> None:
         for unit, state, (_, _, free) in zip(self.units, self.states, self.raw):

@@ -16,6 +16,7 @@
     tolerance = 1e-5                        # iterative (default 1e-6), adaptive (1e-5)
     acceleration = "aitken"                 # iterative: or "iqn-ils", "none"
     record_every = 1                        # optional: keep every n-th point (long runs)
+    fmi = 2                                 # optional: run sewfmu's FMI 3.0 FMUs with 3
 
     [instances.shaft]
     fmu = "MainShaft"
@@ -43,7 +44,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from components.catalogue import FMUS
+from components.catalogue import FMI_VERSIONS, FMUS
 
 MASTERS = ("jacobi", "gauss-seidel", "iterative", "adaptive")
 ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
@@ -96,6 +97,7 @@ class Scenario:
     tolerance: float | None = None          # iterative, adaptive masters; None: their default
     tolerance_master: str | None = None     # the master a file's tolerance was given for
     acceleration: str = "aitken"                          # iterative master
+    fmi: int = 2                      # the FMI version of sewfmu's FMUs it runs (2 or 3)
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
@@ -182,6 +184,12 @@ class Scenario:
             self.tolerance = _positive(value, f"{origin} experiment.tolerance")
             self.tolerance_master = None          # given with --set: for whichever master runs
             return
+        if key == "fmi":
+            if isinstance(value, bool) or value not in FMI_VERSIONS:
+                raise ScenarioError(f"{origin} experiment.fmi: the FMI version of the FMUs, 2 or "
+                                    f"3, got {value!r}")
+            self.fmi = int(value)
+            return
         if key == "record_every":
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ScenarioError(f"{origin} experiment.record_every: must be a whole number "
@@ -191,7 +199,7 @@ class Scenario:
         if key not in ("step", "stop_time", "revolutions"):
             raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
                                 f"(step, stop_time, revolutions, master, record_every, "
-                                f"tolerance, acceleration)")
+                                f"tolerance, acceleration, fmi)")
         number = _positive(value, f"{origin} experiment.{key}")
         setattr(self, key, number)
         if key == "stop_time":
@@ -312,7 +320,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
             raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
     exp = _table(data, "experiment", source)
     known_exp = {"revolutions", "stop_time", "shaft", "step", "master", "record_every",
-                 "tolerance", "acceleration"}
+                 "tolerance", "acceleration", "fmi"}
     for key in exp:
         if key not in known_exp:
             raise ScenarioError(f"{source}: unknown key experiment.{key} "
@@ -359,7 +367,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
-    for key in ("record_every", "tolerance", "acceleration"):
+    for key in ("record_every", "tolerance", "acceleration", "fmi"):
         if key in exp:
             scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
     if "tolerance" in exp:

@@ -1,4 +1,5 @@
-"""The co-simulation master: fmpy FMU2Slave instances stepped at a fixed communication step.
+"""The co-simulation master: fmpy FMU2Slave (or FMU3Slave) instances stepped at a fixed
+communication step.
 
 One base class owns the whole run: loading and extracting the FMUs, initialization in dependency
 order, the stepping loop, recording into a preallocated numpy array and freeing every instance
@@ -32,6 +33,7 @@ import shutil
 import sys
 import time as clock
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +49,7 @@ from fmpy.fmi2 import (
     fmi2Real,
     fmi2ValueReference,
 )
+from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
 from . import interrupt
 from .format import Scenario, ScenarioError
@@ -87,7 +90,7 @@ _EXTRACTED: dict[tuple, tuple[str, object]] = {}
 _LIBRARIES: list = []
 
 
-def release_at_exit(fmu: FMU2Slave) -> None:
+def release_at_exit(fmu) -> None:
     """Have the library of an fmpy FMU object released at Python's exit (see above)."""
     _LIBRARIES.append(fmu.dll)
 
@@ -131,7 +134,7 @@ def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: {inst.name} "
                                     f"({md.modelName}) has no parameter {key!r} "
                                     f"(has: {', '.join(names)})")
-            if v.type == "Integer" and value != int(value):
+            if kind_of(v) == "Integer" and value != int(value):
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: must be an integer, "
                                     f"got {value!r}")
 
@@ -141,30 +144,6 @@ def _reason(lines: list[str], err: Exception) -> str:
     errors = [line.split(": ", 1)[-1] for line in lines if line.startswith("[ERROR]")]
     text = errors[-1] if errors else (lines[-1] if lines else str(err))
     return " ".join(text.split())
-
-
-def instantiate(fmu: FMU2Slave, log: "LogCollector") -> None:
-    """fmi2Instantiate, leaving this process's sys.path as it was.
-
-    pythonfmu puts the FMU's resources folder first on sys.path at every instantiation and
-    leaves it there: later imports of this process would find the FMU's copies (its pythonfmu
-    lacks the binaries the builder needs) and sys.path would grow with every instance. The FMU
-    has imported its code by then, so sys.path is put back.
-    """
-    saved_path = list(sys.path)
-    try:
-        fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
-    finally:
-        sys.path[:] = saved_path
-
-
-def release(fmu: FMU2Slave) -> None:
-    """Terminate and free a healthy instance, keeping its library loaded (see Master._free)."""
-    try:
-        fmu.terminate()
-    except Exception:
-        pass
-    fmu.fmi2FreeInstance(fmu.component)
 
 
 class LogCollector:
@@ -183,31 +162,64 @@ class LogCollector:
             pass
 
     def _log(self, component, instance_name, status, category, message):
-        name = instance_name.decode("utf-8", "replace") if instance_name else "?"
+        self.add(instance_name.decode("utf-8", "replace") if instance_name else "?", status,
+                 message)
+
+    def add(self, name: str, status: int, message: bytes | None) -> None:
         text = message.decode("utf-8", "replace") if message else ""
         self.lines.append(f"[{_STATUS[status] if 0 <= status < 6 else status}] {name}: {text}")
+
+    def for_fmi3(self, name: str):
+        """An FMI 3.0 log callback for the instance `name` (FMI 3.0 passes no instance name)."""
+        return lambda environment, status, category, message: self.add(name, status, message)
 
     def for_instance(self, name: str) -> list[str]:
         return [line for line in self.lines if f"] {name}: " in line]
 
 
+def kind_of(variable) -> str:
+    """A variable's type in FMI 2.0's words: Real, Integer, Boolean or String (FMI 3.0 names
+    Float64, Int32 and their kin)."""
+    return _KINDS.get(variable.type, variable.type)
+
+
+_KINDS = {"Float64": "Real", "Float32": "Real",
+          **{f"{sign}Int{bits}": "Integer" for sign in ("", "U") for bits in (8, 16, 32, 64)}}
+
+
 class FmuInstance:
-    """One instance of an FMU as the master runs it (fmpy's FMU2Slave), its value references
-    resolved; the scenario declares it as a format.Instance."""
+    """One instance of an FMI 2.0 FMU as the master runs it (fmpy's FMU2Slave), its value
+    references resolved; the scenario declares it as a format.Instance. Fmu3Instance runs an
+    FMI 3.0 FMU the same way: `for_fmu` picks by the modelDescription's fmiVersion."""
+
+    BOOLEAN = fmi2Boolean
+    # the FMI functions, by what they do
+    CALLS = {"set_real": "fmi2SetReal", "get_real": "fmi2GetReal",
+             "get_boolean": "fmi2GetBoolean", "do_step": "fmi2DoStep",
+             "get_state": "fmi2GetFMUstate", "set_state": "fmi2SetFMUstate",
+             "free_state": "fmi2FreeFMUstate", "free": "fmi2FreeInstance"}
+
+    @staticmethod
+    def for_fmu(name: str, unzip_dir: str, md, log: "LogCollector") -> "FmuInstance":
+        cls = Fmu3Instance if md.fmiVersion.startswith("3") else FmuInstance
+        return cls(name, unzip_dir, md, log)
 
     def __init__(self, name: str, unzip_dir: str, md, log: LogCollector):
         self.name = name
         self.md = md
         self.variables = {v.name: v for v in md.modelVariables}
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu = self.FMU_CLASS(guid=md.guid, unzipDirectory=unzip_dir,
+                                  modelIdentifier=md.coSimulation.modelIdentifier,
+                                  instanceName=name)
         release_at_exit(self.fmu)
         self.log = log
         self.instantiated = False
-        self.failed = False          # a call returned fmi2Fatal: make no further calls
+        self.failed = False          # a call returned Fatal: make no further calls
         self.real_out: list[str] = []       # outputs read every step, in order
         self.bool_out: list[str] = []
         self.inputs: list[tuple[str, "FmuInstance", str]] = []   # (input, source unit, source output)
+
+    FMU_CLASS = FMU2Slave
 
     def variable(self, var: str, causality: tuple[str, ...], what: str):
         v = self.variables.get(var)
@@ -218,11 +230,11 @@ class FmuInstance:
         return v
 
     def want_output(self, var: str, what: str) -> tuple[str, int]:
-        v = self.variable(var, ("output",), what)
-        group = self.bool_out if v.type == "Boolean" else self.real_out
+        boolean = kind_of(self.variable(var, ("output",), what)) == "Boolean"
+        group = self.bool_out if boolean else self.real_out
         if var not in group:
             group.append(var)
-        return ("bool" if v.type == "Boolean" else "real"), group.index(var)
+        return ("bool" if boolean else "real"), group.index(var)
 
     def prepare(self) -> None:
         """Preallocate the ctypes arrays for the batched calls of every step."""
@@ -233,28 +245,79 @@ class FmuInstance:
             return vrs, vals, len(names)
 
         self.out_vr, self.out_buf, self.n_out = arrays(self.real_out, fmi2Real)
-        self.bool_vr, self.bool_buf, self.n_bool = arrays(self.bool_out, fmi2Boolean)
+        self.bool_vr, self.bool_buf, self.n_bool = arrays(self.bool_out, self.BOOLEAN)
         self.in_vr, self.in_buf, self.n_in = arrays([i for i, _, _ in self.inputs], fmi2Real)
         # where each input comes from: (source unit, index in its real outputs)
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
 
+    # --- the life of the instance --------------------------------------------------------------
+    def instantiate(self) -> None:
+        """Instantiate, leaving this process's sys.path as it was.
+
+        pythonfmu puts the FMU's resources folder first on sys.path at every instantiation and
+        leaves it there: later imports of this process would find the FMU's copies (its
+        pythonfmu lacks the binaries the builder needs) and sys.path would grow with every
+        instance. The FMU has imported its code by then, so sys.path is put back.
+        """
+        saved_path = list(sys.path)
+        try:
+            self._instantiate()
+        finally:
+            sys.path[:] = saved_path
+        self.instantiated = True
+        self.bind()
+
+    def _instantiate(self) -> None:
+        self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=True)
+
+    def enter_initialization(self, stop: float) -> None:
+        self.fmu.setupExperiment(startTime=0.0, stopTime=stop)
+        self.fmu.enterInitializationMode()
+
+    def set_parameter(self, variable, value) -> None:
+        if kind_of(variable) == "Integer":
+            self.fmu.setInteger([variable.valueReference], [int(value)])
+        else:
+            self.fmu.setReal([variable.valueReference], [float(value)])
+
+    def release(self) -> None:
+        """Terminate and free a healthy instance, keeping its library loaded (see
+        Master._free)."""
+        try:
+            self.fmu.terminate()
+        except Exception:
+            pass
+        getattr(self.fmu, self.CALLS["free"])(self.fmu.component)
+
+    def get_state(self):
+        return self.fmu.getFMUstate()
+
+    def set_state(self, state) -> None:
+        self.fmu.setFMUstate(state)
+
     # --- per-step calls: batched, through the raw ctypes functions (fmpy's wrapper costs a few
     # µs per call); a failure marks the instance, so that no further call is made on it ---------
     def bind(self) -> None:
-        """Resolve the raw FMI functions once the instance exists."""
+        """Resolve the raw FMI functions once the instance exists, with their arguments."""
         raw = self.fmu._functions
-        self.component = self.fmu.component
-        self._set_real = raw["fmi2SetReal"]
-        self._get_real = raw["fmi2GetReal"]
-        self._get_boolean = raw["fmi2GetBoolean"]
-        self._do_step = raw["fmi2DoStep"]
+        self.component = c = self.fmu.component
+        self._set_reals = partial(raw["fmi2SetReal"], c, self.in_vr, self.n_in, self.in_buf)
+        self._get_reals = partial(raw["fmi2GetReal"], c, self.out_vr, self.n_out, self.out_buf)
+        self._get_booleans = partial(raw["fmi2GetBoolean"], c, self.bool_vr, self.n_bool,
+                                     self.bool_buf)
+        self._do_step = partial(raw["fmi2DoStep"], c)
 
-    def _check(self, function: str, status: int) -> None:
-        if status > 1:                     # worse than fmi2Warning: the run stops
-            # after fmi2Discard or fmi2Error the instance may still be terminated and freed;
-            # after fmi2Fatal FMI allows no call at all
+    def raw_state_calls(self) -> tuple:
+        """The raw get, set and free FMU state functions (for SavedStates)."""
+        raw = self.fmu._functions
+        return tuple(raw[self.CALLS[k]] for k in ("get_state", "set_state", "free_state"))
+
+    def _check(self, call: str, status: int) -> None:
+        if status > 1:                     # worse than Warning: the run stops
+            # after Discard or Error the instance may still be terminated and freed; after
+            # Fatal FMI allows no call at all
             self.failed = status >= _FATAL
-            err = FMICallException(function, status)
+            err = FMICallException(self.CALLS.get(call, call), status)
             err.unit = self
             raise err
 
@@ -282,15 +345,15 @@ class FmuInstance:
 
     def set_inputs(self) -> None:
         """Set every connected input to its value in in_buf."""
-        status = self._set_real(self.component, self.in_vr, self.n_in, self.in_buf)
+        status = self._set_reals()
         if status > 1:
-            self._check("fmi2SetReal", status)
+            self._check("set_real", status)
 
     def read_outputs(self) -> None:
         if self.n_out:
-            status = self._get_real(self.component, self.out_vr, self.n_out, self.out_buf)
+            status = self._get_reals()
             if status > 1:
-                self._check("fmi2GetReal", status)
+                self._check("get_real", status)
             # a NaN or infinite output stops the run here, naming its FMU (sewfmu's FMUs log
             # why; a getter cannot refuse), rather than in the FMU it would be passed to
             if not math.isfinite(sum(self.out_buf)):
@@ -300,18 +363,71 @@ class FmuInstance:
                     if not any(line.startswith("[ERROR]") for line in own):
                         self.log.lines.append(f"[ERROR] {self.name}: output {bad[0]} is "
                                               f"{self.out_buf[self.real_out.index(bad[0])]}")
-                    err = FMICallException("fmi2GetReal", 3)
+                    err = FMICallException(self.CALLS["get_real"], 3)
                     err.unit = self
                     raise err
         if self.n_bool:
-            status = self._get_boolean(self.component, self.bool_vr, self.n_bool, self.bool_buf)
+            status = self._get_booleans()
             if status > 1:
-                self._check("fmi2GetBoolean", status)
+                self._check("get_boolean", status)
 
     def do_step(self, t: float, h: float) -> None:
-        status = self._do_step(self.component, t, h, 1)
+        status = self._do_step(t, h, 1)
         if status > 1:
-            self._check("fmi2DoStep", status)
+            self._check("do_step", status)
+
+
+class Fmu3Instance(FmuInstance):
+    """An instance of an FMI 3.0 co-simulation FMU (fmpy's FMU3Slave): the same run through
+    FMI 3.0's calls (Float64 for Real, the step's extra results, no setupExperiment)."""
+
+    FMU_CLASS = FMU3Slave
+    BOOLEAN = fmi3Boolean
+    CALLS = {"set_real": "fmi3SetFloat64", "get_real": "fmi3GetFloat64",
+             "get_boolean": "fmi3GetBoolean", "do_step": "fmi3DoStep",
+             "get_state": "fmi3GetFMUState", "set_state": "fmi3SetFMUState",
+             "free_state": "fmi3FreeFMUState", "free": "fmi3FreeInstance"}
+
+    def _instantiate(self) -> None:
+        # no event mode: sewfmu's masters step in co-simulation's step mode only
+        self.fmu.instantiate(loggingOn=True, logMessage=self.log.for_fmi3(self.name))
+
+    def enter_initialization(self, stop: float) -> None:
+        self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop)
+
+    def set_parameter(self, variable, value) -> None:
+        if variable.type == "Float64":
+            self.fmu.setFloat64([variable.valueReference], [float(value)])
+        elif variable.type == "Int32":
+            self.fmu.setInt32([variable.valueReference], [int(value)])
+        elif variable.type == "Int64":
+            self.fmu.setInt64([variable.valueReference], [int(value)])
+        else:
+            raise ScenarioError(f"{self.name}.{variable.name}: a {variable.type} parameter "
+                                f"cannot be set from a scenario")
+
+    def get_state(self):
+        return self.fmu.getFMUState()
+
+    def set_state(self, state) -> None:
+        self.fmu.setFMUState(state)
+
+    def bind(self) -> None:
+        raw = self.fmu._functions
+        self.component = c = self.fmu.component
+        self._set_reals = partial(raw["fmi3SetFloat64"], c, self.in_vr, self.n_in, self.in_buf,
+                                  self.n_in)
+        self._get_reals = partial(raw["fmi3GetFloat64"], c, self.out_vr, self.n_out,
+                                  self.out_buf, self.n_out)
+        self._get_booleans = partial(raw["fmi3GetBoolean"], c, self.bool_vr, self.n_bool,
+                                     self.bool_buf, self.n_bool)
+        # doStep's results: event handling needed, terminate, early return, last successful
+        # time (sewfmu's masters use no event mode and allow no early return)
+        self._step_results = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
+        refs = [ctypes.byref(x) for x in self._step_results]
+        step = raw["fmi3DoStep"]
+        # noSetFMUStatePriorToCurrentPoint is false: the iterative and adaptive masters do
+        self._do_step = lambda t, h, _: step(c, t, h, False, *refs)
 
 
 class Master:
@@ -406,14 +522,14 @@ class Master:
     def save_state(self) -> tuple:
         """The state of every FMU and of the master: `restore_state` rolls back to it."""
         with self._reporting(self.k * self.scenario.step):
-            return (self.k, self._row, [u.fmu.getFMUstate() for u in self.instances],
+            return (self.k, self._row, [u.get_state() for u in self.instances],
                     [list(u.in_buf) for u in self.instances])
 
     def restore_state(self, state: tuple) -> None:
         self.k, self._row, fmu_states, inputs = state
         with self._reporting(self.k * self.scenario.step):
             for unit, fmu_state, values in zip(self.instances, fmu_states, inputs):
-                unit.fmu.setFMUstate(fmu_state)
+                unit.set_state(fmu_state)
                 unit.in_buf[:] = values            # the inputs the master last set, as then
             for unit in self.instances:            # the caches follow the restored FMUs
                 unit.read_outputs()
@@ -458,13 +574,13 @@ class Master:
             if inst.fmu not in self.fmu_paths:
                 raise ScenarioError(f"{sc.source}: instances.{inst.name}: unknown FMU {inst.fmu!r}")
             unzip_dir, md = extracted_fmu(Path(self.fmu_paths[inst.fmu]))
-            by_name[inst.name] = FmuInstance(inst.name, unzip_dir, md, log)
+            by_name[inst.name] = FmuInstance.for_fmu(inst.name, unzip_dir, md, log)
         for con in sc.connections:
             what = f"{sc.source}: connection {con}"
             src, dst = by_name[con.src], by_name[con.dst]
             out_var = src.variable(con.src_var, ("output",), what)
             in_var = dst.variable(con.dst_var, ("input",), what)
-            if out_var.type != "Real" or in_var.type != "Real":
+            if kind_of(out_var) != "Real" or kind_of(in_var) != "Real":
                 raise ScenarioError(f"{what}: only Real connections are supported")
             # a variable without a unit says nothing about it (FMUs from elsewhere): only two
             # declared units that differ are a mismatch
@@ -502,10 +618,7 @@ class Master:
 
     def _initialize(self, unit: FmuInstance, stop: float) -> None:
         """Instantiate, set parameters, take inputs from the already initialized sources."""
-        fmu = unit.fmu
-        instantiate(fmu, unit.log)
-        unit.instantiated = True
-        unit.bind()
+        unit.instantiate()
         try:
             self._set_up(unit, stop)
         except FMICallException as err:
@@ -514,17 +627,11 @@ class Master:
             raise
 
     def _set_up(self, unit: FmuInstance, stop: float) -> None:
-        fmu = unit.fmu
-        fmu.setupExperiment(startTime=0.0, stopTime=stop)
-        fmu.enterInitializationMode()
+        unit.enter_initialization(stop)
         for key, value in self.scenario.instances[unit.name].parameters.items():
-            v = unit.variables[key]
-            if v.type == "Integer":
-                fmu.setInteger([v.valueReference], [int(value)])
-            else:
-                fmu.setReal([v.valueReference], [float(value)])
+            unit.set_parameter(unit.variables[key], value)
         unit.pull_inputs()
-        fmu.exitInitializationMode()
+        unit.fmu.exitInitializationMode()
         # sewfmu's FMUs answer bad parameters at exitInitializationMode with an fmi2Error log
         # line (and refuse every step), not with fmi2Fatal: stop here, naming the cause
         errors = [line for line in self.log.for_instance(unit.name) if line.startswith("[ERROR]")]
@@ -546,7 +653,7 @@ class Master:
             if unit.instantiated and not unit.failed:
                 # terminate and free, but keep the library loaded: the extraction cache reuses
                 # it, and unloading pythonfmu's binary from a Python host is unsafe
-                release(unit.fmu)
+                unit.release()
                 unit.instantiated = False
 
 

@@ -99,26 +99,26 @@ def _input_table(case: Case):
 
 
 def simulate_case(name: str, path: Path):
-    """The FMU alone in fmpy's simulate_fmu with the case's inputs: a structured array (time,
-    outputs). The instance is made and freed here, so that fmpy does not unload the library."""
+    """The FMU (FMI 2.0 or 3.0) alone in fmpy's simulate_fmu with the case's inputs: a
+    structured array (time, outputs). The instance is made and freed here, so that fmpy does not
+    unload the library."""
     from fmpy import simulate_fmu
-    from fmpy.fmi2 import FMU2Slave
 
-    from .master import extracted_fmu, LogCollector, instantiate, release
+    from .master import FmuInstance, LogCollector, extracted_fmu
 
     case = CASES[name]
     unzip_dir, md = extracted_fmu(Path(path))
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     inputs = _input_table(case) if case.inputs else None
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip_dir,
-                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-    instantiate(fmu, LogCollector())
-    result = simulate_fmu(str(path), start_time=0.0, stop_time=case.stop,
-                          output_interval=case.step,
-                          input=inputs, output=outputs, validate=False, fmu_instance=fmu,
-                          terminate=False)
-    release(fmu)
-    return result
+    unit = FmuInstance.for_fmu(name, unzip_dir, md, LogCollector())
+    unit.prepare()
+    unit.instantiate()
+    try:
+        return simulate_fmu(str(path), start_time=0.0, stop_time=case.stop,
+                            output_interval=case.step, input=inputs, output=outputs,
+                            validate=False, fmu_instance=unit.fmu, terminate=False)
+    finally:
+        unit.release()
 
 
 def _write_csv(path: Path, table) -> None:

@@ -82,8 +82,11 @@ def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False
     return headline
 
 
-def fmus_for_names(names: list[str], fmu_dir: Path | None = None) -> dict[str, Path]:
-    return ensure_built(sorted(names), fmu_dir or default_fmu_dir())
+def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
+                   fmi: int = 2) -> dict[str, Path]:
+    """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
+    (default: fmus/; FMI 3.0: its folder fmi3/)."""
+    return ensure_built(sorted(names), default_fmu_dir(fmi, fmu_dir), fmi=fmi)
 
 
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
@@ -96,7 +99,7 @@ def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]
     if unknown:
         raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
                             f"(known: {', '.join(FMUS)})")
-    return ensure_built(names, fmu_dir or default_fmu_dir())
+    return fmus_for_names(names, fmu_dir, scenario.fmi)
 
 
 def simulate(scenario: Scenario, fmu_dir: Path | None = None) -> RunResult:
@@ -161,7 +164,8 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
             "instances": instances, "master": scenario.master, "step": scenario.step,
             **scenario.master_settings(),
             "end_time": scenario.end_time(), "sewfmu": VERSION,
-            "fmus": {fmu: md.version for fmu, md in sorted(described.items())}}
+            "fmus": {fmu: md.version for fmu, md in sorted(described.items())},
+            "fmi": {fmu: md.fmiVersion for fmu, md in sorted(described.items())}}
 
 
 def _number(text: str) -> float | int:

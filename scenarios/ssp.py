@@ -19,6 +19,7 @@ from fmpy import read_model_description
 from components.units import UNITS
 
 from .format import Scenario
+from .master import kind_of
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -57,11 +58,11 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
             con = ET.SubElement(connectors, _q(SSD, "Connector"),
                                 {"name": v.name, "kind": v.causality})
             attrib = {"unit": v.unit} if v.unit else {}
-            ET.SubElement(con, _q(SSC, v.type), attrib)
+            ET.SubElement(con, _q(SSC, kind_of(v)), attrib)     # SSP 1.0: Real for Float64
             if v.unit:
                 used_units.add(v.unit)
         if inst.parameters:
-            types = {v.name: v.type for v in md.modelVariables}
+            types = {v.name: kind_of(v) for v in md.modelVariables}
             bindings = ET.SubElement(comp, _q(SSD, "ParameterBindings"))
             binding = ET.SubElement(bindings, _q(SSD, "ParameterBinding"))
             values = ET.SubElement(binding, _q(SSD, "ParameterValues"))

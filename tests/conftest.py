@@ -1,4 +1,6 @@
-"""Shared fixtures: the FMUs built once per test session into a temporary folder."""
+"""Shared fixtures: the FMUs built once per test session into a temporary folder, FMI 2.0
+(`fmu_paths`) and FMI 3.0 (`fmu3_paths`); `fmus` gives each in turn, for the tests
+of the FMUs themselves."""
 import os
 
 import pytest
@@ -23,6 +25,23 @@ def fmu_dir(tmp_path_factory):
 @pytest.fixture(scope="session")
 def fmu_paths(fmu_dir):
     return {p.stem: p for p in fmu_dir.glob("*.fmu")}
+
+
+@pytest.fixture(scope="session")
+def fmu3_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("fmus3")
+    build_all(folder, fmi=3)
+    return folder
+
+
+@pytest.fixture(scope="session")
+def fmu3_paths(fmu3_dir):
+    return {p.stem: p for p in fmu3_dir.glob("*.fmu")}
+
+
+@pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])
+def fmus(request):
+    return request.getfixturevalue("fmu_paths" if request.param == 2 else "fmu3_paths")
 
 
 @pytest.fixture(scope="session", autouse=True)

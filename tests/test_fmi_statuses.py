@@ -1,7 +1,8 @@
-"""Statuses as FMI 2.0 means them, through fmpy: refused calls answer fmi2Discard with a log line
-naming the cause and leave the instance usable (state restore, terminate, free); calls out of the
-standard's order are refused the same way; a step of any length is taken or refused quickly; two
-threads keep stepping while one is refused; instantiate/free does not grow sys.path or memory."""
+"""Statuses as FMI means them, through fmpy, for the FMI 2.0 and the FMI 3.0 FMUs: refused calls
+answer Discard with a log line naming the cause and leave the instance usable (state restore,
+terminate, free); calls out of the standard's order are refused the same way; a step of any
+length is taken or refused quickly; two threads keep stepping while one is refused;
+instantiate/free does not grow sys.path or memory."""
 import json
 import math
 import os
@@ -17,8 +18,8 @@ from components.punch_contact import MAX_SEARCH_INTERVALS, PunchContact
 from tests.fmu_host import Host
 
 
-def _ready(fmu_paths, name="PunchContact", **inputs):
-    host = Host(fmu_paths[name], name)
+def _ready(fmus, name="PunchContact", **inputs):
+    host = Host(fmus[name], name)
     if inputs:
         host.set(**inputs)
     host.fmu.exitInitializationMode()
@@ -33,8 +34,8 @@ def _refused(host, t, h, *words):
     assert host.log.lines[-1].startswith("[ERROR]")
 
 
-def test_do_step_before_initialization_is_refused(fmu_paths):
-    host = Host(fmu_paths["PunchContact"])              # in initialization mode
+def test_do_step_before_initialization_is_refused(fmus):
+    host = Host(fmus["PunchContact"])              # in initialization mode
     _refused(host, 0.0, 1e-4, "before exitInitializationMode")
     host.fmu.exitInitializationMode()
     host.fmu.doStep(0.0, 1e-4)                          # then it steps
@@ -42,15 +43,15 @@ def test_do_step_before_initialization_is_refused(fmu_paths):
 
 
 @pytest.mark.parametrize("h", [0.0, -1e-4, math.nan, math.inf])
-def test_a_step_size_that_is_not_positive_and_finite_is_refused(fmu_paths, h):
-    host = _ready(fmu_paths, "PunchLinkage")
+def test_a_step_size_that_is_not_positive_and_finite_is_refused(fmus, h):
+    host = _ready(fmus, "PunchLinkage")
     _refused(host, 0.0, h, "step size must be positive and finite")
     host.fmu.doStep(0.0, 1e-4)
 
 
 @pytest.mark.parametrize("t", [1e-3, -1e-4, 0.5e-4])
-def test_a_step_that_does_not_start_where_the_last_ended_is_refused(fmu_paths, t):
-    host = _ready(fmu_paths, "MainShaft")
+def test_a_step_that_does_not_start_where_the_last_ended_is_refused(fmus, t):
+    host = _ready(fmus, "MainShaft")
     host.fmu.doStep(0.0, 1e-4)
     before = host.get("phi")
     _refused(host, t, 1e-4, "the last one ended at t = 0.0001")
@@ -59,8 +60,8 @@ def test_a_step_that_does_not_start_where_the_last_ended_is_refused(fmu_paths, t
     assert host.get("phi") == pytest.approx(100.0 * 2e-4)
 
 
-def test_a_nan_input_is_refused_and_the_instance_goes_on_after_a_restore(fmu_paths):
-    host = _ready(fmu_paths, xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
+def test_a_nan_input_is_refused_and_the_instance_goes_on_after_a_restore(fmus):
+    host = _ready(fmus, xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
     host.fmu.doStep(0.0, 1e-4)
     state = host.fmu.getFMUstate()
     y = host.get("y")
@@ -74,15 +75,15 @@ def test_a_nan_input_is_refused_and_the_instance_goes_on_after_a_restore(fmu_pat
     host.close()                                           # terminate and free: no crash
 
 
-def test_a_fixed_parameter_set_after_initialization_is_ignored_with_a_log_line(fmu_paths):
-    host = _ready(fmu_paths)
+def test_a_fixed_parameter_set_after_initialization_is_ignored_with_a_log_line(fmus):
+    host = _ready(fmus)
     host.set(c3=1.0)
     assert "parameter c3 is fixed" in host.log.lines[-1]
     assert host.get("c3") == 1.0e5
 
 
-def test_unknown_value_references_get_a_log_line_not_a_fatal(fmu_paths):
-    host = _ready(fmu_paths)
+def test_unknown_value_references_get_a_log_line_not_a_fatal(fmus):
+    host = _ready(fmus)
     host.fmu.setReal([999], [1.0])
     assert "value reference 999" in host.log.lines[-1]
     assert math.isnan(host.fmu.getReal([999])[0])
@@ -93,8 +94,8 @@ def test_unknown_value_references_get_a_log_line_not_a_fatal(fmu_paths):
     assert not host.failed
 
 
-def test_a_damaged_serialized_state_is_refused(fmu_paths):
-    host = _ready(fmu_paths)
+def test_a_damaged_serialized_state_is_refused(fmus):
+    host = _ready(fmus)
     blob = host.fmu.serializeFMUstate(host.fmu.getFMUstate())
     state = host.fmu.deSerializeFMUstate(b"not json" + bytes(blob[8:]))
     host.fmu.setFMUstate(state)
@@ -104,8 +105,8 @@ def test_a_damaged_serialized_state_is_refused(fmu_paths):
 
 
 # --- bounded work per step -----------------------------------------------------------------------
-def test_a_huge_step_is_refused_at_once_naming_the_longest_step_it_takes(fmu_paths):
-    host = _ready(fmu_paths, xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
+def test_a_huge_step_is_refused_at_once_naming_the_longest_step_it_takes(fmus):
+    host = _ready(fmus, xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
     started = time.perf_counter()
     _refused(host, 0.0, 1e6, "switch-search intervals", "take steps of at most")
     assert time.perf_counter() - started < 1.0
@@ -114,8 +115,8 @@ def test_a_huge_step_is_refused_at_once_naming_the_longest_step_it_takes(fmu_pat
     assert math.isfinite(host.get("y"))
 
 
-def test_extreme_but_valid_parameters_are_refused_quickly_at_the_default_step(fmu_paths):
-    host = Host(fmu_paths["PunchContact"])
+def test_extreme_but_valid_parameters_are_refused_quickly_at_the_default_step(fmus):
+    host = Host(fmus["PunchContact"])
     host.set(m=1e-9, c3=1e9, xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
     host.fmu.exitInitializationMode()
     started = time.perf_counter()
@@ -124,12 +125,12 @@ def test_extreme_but_valid_parameters_are_refused_quickly_at_the_default_step(fm
 
 
 # --- threads -------------------------------------------------------------------------------------
-def test_two_threads_keep_stepping_while_one_is_refused_a_bad_input(fmu_paths):
+def test_two_threads_keep_stepping_while_one_is_refused_a_bad_input(fmus):
     """pythonfmu keeps the interpreter lock after fmi2Fatal; a Discard must leave it free."""
     done = {}
 
     def run(name, bad):
-        host = Host(fmu_paths["PunchContact"], name)
+        host = Host(fmus["PunchContact"], name)
         host.set(xi=4.5e-3, xi_dot=0.0, xi_ddot=0.0)
         host.fmu.exitInitializationMode()
         refused = 0
@@ -171,12 +172,12 @@ for _ in range(20):
 gc.collect()
 path0 = list(sys.path)
 tracemalloc.start()
-before = tracemalloc.get_traced_memory()[0]
+before = tracemalloc.take_snapshot().traces
 for _ in range(int(sys.argv[3])):
     cycle()
 gc.collect()
-print(json.dumps({"bytes": tracemalloc.get_traced_memory()[0] - before,
-                  "path_same": sys.path == path0}))
+after = tracemalloc.take_snapshot().traces
+print(json.dumps({"blocks": len(after) - len(before), "path_same": sys.path == path0}))
 """
 
 
@@ -190,5 +191,8 @@ def test_instantiate_and_free_a_thousand_times_grows_neither_sys_path_nor_memory
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["path_same"]
     # what pythonfmu 0.7.0's binary itself keeps per instantiation (a list and a few short
-    # strings, about 0.3 KiB) stays; a class, an instance or a namespace kept would be 5 KiB+
-    assert result["bytes"] / 1000 < 512, result
+    # strings: 6 to 7 blocks, about 0.4 KiB) stays; a class, an instance or a namespace kept would
+    # be a hundred blocks and more. Blocks, not bytes: a dict of the interpreter's that happens to
+    # grow its table within the 1000 cycles adds kilobytes at once, and where that falls moves
+    # with the code
+    assert result["blocks"] / 1000 < 10, result

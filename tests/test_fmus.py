@@ -24,14 +24,14 @@ from tests.fmu_host import Host
 REPO = Path(__file__).resolve().parent.parent
 
 
-def test_every_fmu_passes_fmpy_validate(fmu_paths):
-    assert set(fmu_paths) == set(FMUS)
-    for name, path in fmu_paths.items():
+def test_every_fmu_passes_fmpy_validate(fmus):
+    assert set(fmus) == set(FMUS)
+    for name, path in fmus.items():
         assert validate_fmu(str(path)) == [], name
 
 
-def test_every_variable_has_a_unit_and_a_description(fmu_paths):
-    for path in fmu_paths.values():
+def test_every_variable_has_a_unit_and_a_description(fmus):
+    for path in fmus.values():
         md = Host(path).md
         for v in md.modelVariables:
             assert v.description, v.name
@@ -39,18 +39,18 @@ def test_every_variable_has_a_unit_and_a_description(fmu_paths):
                 assert v.unit, v.name
 
 
-def test_outputs_declare_their_dependency_on_inputs(fmu_paths):
-    md = Host(fmu_paths["PunchContact"]).md
+def test_outputs_declare_their_dependency_on_inputs(fmus):
+    md = Host(fmus["PunchContact"]).md
     deps = {u.variable.name: [d.name for d in u.dependencies] for u in md.outputs}
     assert deps["y"] == [] and deps["F2"] == []              # state only
     assert deps["F3"] == ["xi", "xi_dot", "xi_ddot"]          # direct feedthrough
-    md = Host(fmu_paths["PunchLinkage"]).md
+    md = Host(fmus["PunchLinkage"]).md
     assert all(len(u.dependencies) == 3 for u in md.outputs)
 
 
 # --- the co-simulation contract -----------------------------------------------------------------
-def test_outputs_after_initialization_follow_the_inputs_set_during_it(fmu_paths):
-    link = Host(fmu_paths["PunchLinkage"])
+def test_outputs_after_initialization_follow_the_inputs_set_during_it(fmus):
+    link = Host(fmus["PunchLinkage"])
     link.set(phi=1.0, omega=120.0, epsilon=50.0)
     link.fmu.exitInitializationMode()
     e = PunchLinkage().motion(1.0, 120.0, 50.0)
@@ -59,23 +59,23 @@ def test_outputs_after_initialization_follow_the_inputs_set_during_it(fmu_paths)
     # direct feedthrough: new inputs, same instant, new outputs (no step)
     link.set(phi=2.0)
     assert link.get("xi") == pytest.approx(PunchLinkage().motion(2.0, 120.0, 50.0).xi)
-    punch = Host(fmu_paths["PunchContact"])
+    punch = Host(fmus["PunchContact"])
     punch.set(xi=3.7e-3, xi_dot=0.0, xi_ddot=0.0)
     punch.fmu.exitInitializationMode()
     assert punch.get("y", "y_dot", "Delta", "contact") == [3.7e-3, 0.0, 0.0, False]
 
 
-def test_outputs_after_a_step_are_values_at_its_end(fmu_paths):
+def test_outputs_after_a_step_are_values_at_its_end(fmus):
     """The linkage extrapolates its inputs over the step (Taylor): after doStep(t, h) its outputs
     are the excitation at t + h even if the host does not set new inputs (libcosim, ecos)."""
-    link = Host(fmu_paths["PunchLinkage"])
+    link = Host(fmus["PunchLinkage"])
     link.set(phi=0.5, omega=100.0, epsilon=400.0)
     link.fmu.exitInitializationMode()
     h = 1e-3
     link.fmu.doStep(0.0, h)
     e = PunchLinkage().motion(0.5 + 100.0 * h + 0.5 * 400.0 * h * h, 100.0 + 400.0 * h, 400.0)
     assert link.get("xi", "xi_dot") == pytest.approx([e.xi, e.xi_dot], rel=1e-12)
-    shaft = Host(fmu_paths["MainShaft"])
+    shaft = Host(fmus["MainShaft"])
     shaft.set(omega0=80.0)
     shaft.fmu.exitInitializationMode()
     shaft.fmu.doStep(0.0, 0.25)
@@ -90,12 +90,12 @@ def test_outputs_after_a_step_are_values_at_its_end(fmu_paths):
     ("MainShaft", {"omega0": 0.0}, ["parameter omega0"]),
     ("PunchLinkage", {"L_AB": 29.0e-3}, ["cannot be assembled", "crank angle alpha ="]),
 ])
-def test_bad_parameters_are_named_at_initialization_and_every_step_is_discarded(fmu_paths, fmu,
+def test_bad_parameters_are_named_at_initialization_and_every_step_is_discarded(fmus, fmu,
                                                                                  values, words):
     """pythonfmu could fail exitInitializationMode only with fmi2Fatal (after which a host may
     not even free the instance): the FMU logs an fmi2Error line naming the parameter there, and
     refuses every doStep with fmi2Discard; the instance stays healthy and is freed."""
-    host = Host(fmu_paths[fmu])
+    host = Host(fmus[fmu])
     host.set(**values)
     host.fmu.exitInitializationMode()
     errors = [line for line in host.log.lines if line.startswith("[ERROR]")]
@@ -111,8 +111,8 @@ def test_bad_parameters_are_named_at_initialization_and_every_step_is_discarded(
 
 
 @pytest.mark.parametrize("bad", [float("nan"), float("inf")])
-def test_nan_or_infinite_inputs_are_refused_by_do_step(fmu_paths, bad):
-    punch = Host(fmu_paths["PunchContact"])
+def test_nan_or_infinite_inputs_are_refused_by_do_step(fmus, bad):
+    punch = Host(fmus["PunchContact"])
     punch.set(xi=4e-3, xi_ddot=0.0)
     punch.fmu.exitInitializationMode()
     punch.fmu.doStep(0.0, 1e-4)
@@ -149,8 +149,8 @@ def _jacobi_steps(chain, t0, n, h):
 
 
 @pytest.mark.parametrize("serialize", [False, True])
-def test_restored_state_repeats_the_steps_bit_for_bit(fmu_paths, serialize):
-    chain = _punch_chain(fmu_paths)
+def test_restored_state_repeats_the_steps_bit_for_bit(fmus, serialize):
+    chain = _punch_chain(fmus)
     h = 2e-4
     _jacobi_steps(chain, 0.0, 60, h)                  # into the contact phase (φ ≈ 103°)
     states = [u.fmu.getFMUstate() for u in chain]
@@ -234,11 +234,11 @@ def test_each_fmu_runs_from_its_file_alone_in_a_fresh_process(fmu_paths, tmp_pat
                                      abs=1e-12)
 
 
-def test_instances_in_one_process_are_independent(fmu_paths):
+def test_instances_in_one_process_are_independent(fmus):
     """Two punches with different springs, stepped interleaved, each end where a punch alone
     ends: nothing is shared between instances."""
     def punch(c3):
-        host = Host(fmu_paths["PunchContact"], f"punch_c3_{c3:g}")
+        host = Host(fmus["PunchContact"], f"punch_c3_{c3:g}")
         host.set(c3=c3, xi=2e-3, xi_ddot=0.0)
         host.fmu.exitInitializationMode()
         return host
@@ -314,16 +314,17 @@ script = __import__(module)
 slave = getattr(script, sys.argv[2])(instance_name="probe", resources=sys.argv[1])
 slave.enter_initialization_mode()
 slave.exit_initialization_mode()
-assert slave.do_step(0.0, 1e-4), slave.log_queue
+result = slave.do_step(0.0, 1e-4)             # FMI 3.0: a step result with a status
+assert getattr(result, "status", not result) == 0, slave.log_queue
 assert "numpy" not in sys.modules
 print("ok")
 """
 
 
 @pytest.mark.parametrize("name", list(FMUS))
-def test_the_code_an_fmu_carries_runs_on_the_standard_library_alone(fmu_paths, tmp_path, name):
+def test_the_code_an_fmu_carries_runs_on_the_standard_library_alone(fmus, tmp_path, name):
     """python -S -I: no site-packages, no environment: only the FMU's resources folder."""
-    with zipfile.ZipFile(fmu_paths[name]) as zf:
+    with zipfile.ZipFile(fmus[name]) as zf:
         zf.extractall(tmp_path)
     proc = subprocess.run([sys.executable, "-S", "-I", "-c", _STDLIB_ONLY,
                            str(tmp_path / "resources"), name], capture_output=True, text=True,
@@ -331,8 +332,8 @@ def test_the_code_an_fmu_carries_runs_on_the_standard_library_alone(fmu_paths, t
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
 
 
-def test_model_description_declares_no_execution_tool_and_a_default_experiment(fmu_paths):
-    for name, path in fmu_paths.items():
+def test_model_description_declares_no_execution_tool_and_a_default_experiment(fmus):
+    for name, path in fmus.items():
         md = read_model_description(str(path))
         assert md.coSimulation.needsExecutionTool is False, name
         assert md.defaultExperiment is not None, name
@@ -344,29 +345,29 @@ def _starts(path):
             if v.causality == "input"}
 
 
-def test_input_start_values_are_the_default_setup(fmu_paths):
+def test_input_start_values_are_the_default_setup(fmus):
     """A host that starts the connections at the start values starts at rest: each input's start
     value is what its default source gives at t = 0 (computed here from the models)."""
     shaft = MainShaft().state(0.0)
     for linkage, speed in (("PunchLinkage", shaft[1]), ("FeedLinkage", 303.5),
                            ("TakeupLinkage", 5000 * 2 * math.pi / 60),
                            ("CarriageDrive", 1600 * 2 * math.pi / 60)):
-        assert _starts(fmu_paths[linkage]) == pytest.approx(
+        assert _starts(fmus[linkage]) == pytest.approx(
             {"phi": 0.0, "omega": speed, "epsilon": 0.0}), linkage
     e = PunchLinkage().motion(*shaft)
-    assert _starts(fmu_paths["PunchContact"]) == pytest.approx(
+    assert _starts(fmus["PunchContact"]) == pytest.approx(
         {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}, rel=1e-12, abs=1e-12)
     # split at the fabric: the body as PunchContact, no fabric force yet; the fabric sees the
     # punch at rest at the top, accelerated down by spring 6 (the body's own y'' at t = 0)
-    assert _starts(fmu_paths["PunchBody"]) == pytest.approx(
+    assert _starts(fmus["PunchBody"]) == pytest.approx(
         {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot, "F2": 0.0, "F2_dot": 0.0},
         rel=1e-12, abs=1e-12)
     body = PunchBody()
     at_rest = body.outputs(body.initial_state(e.xi, e.xi_dot, e.xi_ddot), e.xi, e.xi_dot,
                            e.xi_ddot)
-    assert _starts(fmu_paths["Fabric"]) == pytest.approx(
+    assert _starts(fmus["Fabric"]) == pytest.approx(
         {"y": at_rest.y, "y_dot": at_rest.y_dot, "y_ddot": at_rest.y_ddot}, rel=1e-12, abs=1e-12)
     omega = 1600 * 2 * math.pi / 60
     _, _, a, jerk = CarriageDrive().motion(0.0, omega, 0.0)
-    assert _starts(fmu_paths["CarriageModal"]) == pytest.approx(
+    assert _starts(fmus["CarriageModal"]) == pytest.approx(
         {"a_base": a, "a_base_dot": jerk}, rel=1e-12)

@@ -1,24 +1,24 @@
-"""The shared FMU layer: what every sewfmu FMU needs and pythonfmu does not give.
+"""What every sewfmu FMU does, whichever FMI version carries it.
 
-A concrete FMU subclasses `SewSlave` and declares, as class attributes, its parameter dataclass,
-its inputs, outputs and calculated parameters and its default experiment; it implements
-`build_model`, `initialize`, `advance` and `current_outputs`, which forward to the plain-Python
-model. This class gives:
+A concrete FMU subclasses `SewSlave` (or `LinkageSlave`) and declares, as class attributes, its
+parameter dataclass, its inputs, outputs and calculated parameters and its default experiment;
+it implements `build_model`, `initialize`, `advance` and `current_outputs`, which forward to the
+plain-Python model. It is not an FMU by itself: `sewfmu build` joins it with the layer of one FMI
+version (fmi2_layer.Fmi2Layer on pythonfmu, fmi3_layer.Fmi3Layer on pythonfmu3), which registers
+`self.variables` in its own terms, writes its modelDescription and names its calls. This class
+gives, the same for both:
 
-- a modelDescription that passes `fmpy validate`: units with SI base units, outputs and initial
-  unknowns in ModelStructure, each output's dependency on the inputs declared (direct
-  feedthrough or none), a DefaultExperiment;
-- statuses as FMI 2.0 means them, within what pythonfmu 0.7.0 allows. pythonfmu turns every
-  Python exception into fmi2Fatal (and 0.7.0 then keeps the interpreter lock), after which a host
-  may call nothing, not even fmi2FreeInstance. So no exception leaves this class: a step the
-  model cannot take (a NaN input, too many contact switches, a step too long for the switch
-  search, a non-finite result, a call out of the standard's order) returns False from do_step,
-  which pythonfmu reports as fmi2Discard, with an fmi2Error log line naming the cause, and the
-  instance stays as it was before the step (the host may restore a state, terminate, free);
+- statuses as the standard means them, within what pythonfmu allows. pythonfmu turns every
+  Python exception into Fatal (and then keeps the interpreter lock), after which a host may call
+  nothing, not even FreeInstance. So no exception leaves this class: a step the model cannot
+  take (a NaN input, too many contact switches, a step too long for the switch search, a
+  non-finite result, a call out of the standard's order) returns False from do_step, which
+  pythonfmu reports as Discard, with an Error log line naming the cause, and the instance stays
+  as it was before the step (the host may restore a state, terminate, free);
 - parameters checked when the model is built at exitInitializationMode: a bad value or a linkage
-  that cannot assemble is logged at fmi2Error naming the parameter (or the crank angle), and
-  every later doStep is refused the same way (pythonfmu could only say so at exitInitialization-
-  Mode through an exception, i.e. fmi2Fatal; see README "In other FMI tools");
+  that cannot assemble is logged at Error naming the parameter (or the crank angle), and every
+  later doStep is refused the same way (pythonfmu could only say so at exitInitializationMode
+  through an exception, i.e. Fatal; see docs/fmi.md);
 - FMU state (get/set/serialize) that holds the model's internal state, so that a restored state
   repeats the following steps bit for bit;
 - the co-simulation contract every sewfmu FMU follows:
@@ -36,16 +36,9 @@ import math
 import sys
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
-from xml.etree.ElementTree import Element, SubElement
-
-from pythonfmu.default_experiment import DefaultExperiment
-from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
-from pythonfmu.fmi2slave import Fmi2Slave
-from pythonfmu.variables import Boolean, Integer, Real
 
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
-from .units import UNITS
 
 @dataclass(frozen=True)
 class Port:
@@ -81,8 +74,25 @@ class FmuError(RuntimeError):
     """A call the FMU refuses: a bad parameter, a linkage that cannot assemble, a NaN input."""
 
 
-class SewSlave(Fmi2Slave):
-    """Base of every sewfmu FMU; see the module docstring for what it adds to pythonfmu."""
+@dataclass(frozen=True)
+class Variable:
+    """One variable of an FMU as both FMI versions declare it (each in its own words: Real or
+    Float64, Integer or Int32)."""
+    name: str
+    kind: str                      # "Real", "Integer" or "Boolean"
+    causality: str                 # "parameter", "input", "output" or "calculatedParameter"
+    description: str               # with the unit in brackets, for tools that show no units
+    unit: str
+    getter: Callable[[], Any]
+    setter: Callable[[Any], None] | None = None
+    start: Any = None              # parameters and inputs
+    feedthrough: bool = False      # outputs: depends on the inputs at the same instant
+
+
+class SewSlave:
+    """Base of every sewfmu FMU; see the module docstring for what it adds to pythonfmu. An FMI
+    layer comes after it in the class's bases and provides `log_error(message)`, the register
+    of `self.variables` and the names of its calls (`call_names`)."""
 
     author = "sewfmu"
     license = "MIT"
@@ -96,16 +106,16 @@ class SewSlave(Fmi2Slave):
     taylor_inputs: Sequence[tuple[str, ...]] = ()
     # DefaultExperiment (stop time, step size): the FMU run alone shows its mechanism working
     experiment: tuple[float, float] = (1.0, 1e-3)
+    # the layer's names of the calls, for log lines: kind -> (getter, setter)
+    call_names: dict[str, tuple[str, str]] = {}
 
     def __init__(self, **kwargs):
-        super().__init__(**kwargs)
+        super().__init__(**kwargs)     # the layer's pythonfmu base
         if "logger" in kwargs:         # instantiated by pythonfmu's binary, not by its builder
             _forget_resources_path(kwargs.get("resources"))
         cls = type(self)
         self.modelName = cls.model_name or cls.__name__
         self.description = (cls.__doc__ or "").strip().splitlines()[0]
-        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=cls.experiment[0],
-                                                    step_size=cls.experiment[1])
         self._param_info = parameter_info(cls.params_class) if cls.params_class else []
         self._params = {p.name: p.default for p in self._param_info}
         self._inputs = {p.name: float(p.start) for p in cls.inputs}
@@ -116,43 +126,50 @@ class SewSlave(Fmi2Slave):
         self._model = None
         self._cache: dict[str, Any] | None = None
         self._last_error = ""             # the getters log an error once, not at every call
-        self._register_all()
-        # value reference -> getter / setter, for the batched calls of every step
-        self._getters = {vr: v.getter for vr, v in self.vars.items()}
-        self._setters = {vr: v.setter for vr, v in self.vars.items() if v.setter is not None}
-        self._types = {vr: type(v) for vr, v in self.vars.items()}
+        self.variables = self._declare()
+        # value reference -> getter / setter / kind, filled by the layer's register_all
+        self._getters: dict[int, Callable[[], Any]] = {}
+        self._setters: dict[int, Callable[[Any], None]] = {}
+        self._kinds: dict[int, str] = {}
+        self._names: dict[int, str] = {}
+        self.register_all()
+        # the Real ones apart: the batched calls of every step look them up directly
         self._real_getters = {vr: get for vr, get in self._getters.items()
-                              if self._types[vr] is Real}
+                              if self._kinds[vr] == "Real"}
         self._real_setters = {vr: set_ for vr, set_ in self._setters.items()
-                              if self._types[vr] is Real}
+                              if self._kinds[vr] == "Real"}
 
     # --- declaration ---------------------------------------------------------------------------
-    def _register_all(self) -> None:
-        for info in self._param_info:
-            var_type = Integer if info.is_integer else Real
-            self.register_variable(var_type(
-                info.name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
-                description=f"{info.description} [{info.unit}]",
-                getter=self._param_getter(info.name), setter=self._param_setter(info.name)))
-        for port in type(self).inputs:
-            self.register_variable(Real(
-                port.name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-                start=port.start, description=f"{port.description} [{port.unit}]",
-                getter=self._input_getter(port.name), setter=self._input_setter(port.name)))
-        for port in type(self).outputs:
-            var_type = Boolean if port.kind == "Boolean" else Real
-            variability = (Fmi2Variability.discrete if port.kind == "Boolean"
-                           else Fmi2Variability.continuous)
-            self.register_variable(var_type(
-                port.name, causality=Fmi2Causality.output, variability=variability,
-                initial=Fmi2Initial.calculated, description=f"{port.description} [{port.unit}]",
-                getter=self._output_getter(port.name)))
-        for port in type(self).calculated:
-            self.register_variable(Real(
-                port.name, causality=Fmi2Causality.calculatedParameter,
-                variability=Fmi2Variability.fixed, initial=Fmi2Initial.calculated,
-                description=f"{port.description} [{port.unit}]",
-                getter=self._output_getter(port.name)))
+    def _declare(self) -> list[Variable]:
+        """Every variable, in the order of value references: parameters, inputs, outputs,
+        calculated parameters."""
+        cls = type(self)
+        declared = [Variable(info.name, "Integer" if info.is_integer else "Real", "parameter",
+                             f"{info.description} [{info.unit}]", info.unit,
+                             self._param_getter(info.name), self._param_setter(info.name),
+                             start=info.default)
+                    for info in self._param_info]
+        declared += [Variable(port.name, "Real", "input", f"{port.description} [{port.unit}]",
+                              port.unit, self._input_getter(port.name),
+                              self._input_setter(port.name), start=float(port.start))
+                     for port in cls.inputs]
+        declared += [Variable(port.name, port.kind, "output",
+                              f"{port.description} [{port.unit}]", port.unit,
+                              self._output_getter(port.name), feedthrough=port.feedthrough)
+                     for port in cls.outputs]
+        declared += [Variable(port.name, "Real", "calculatedParameter",
+                              f"{port.description} [{port.unit}]", port.unit,
+                              self._output_getter(port.name))
+                     for port in cls.calculated]
+        return declared
+
+    def remember(self, vr: int, variable: Variable) -> None:
+        """The layer tells under which value reference it registered a variable."""
+        self._getters[vr] = variable.getter
+        if variable.setter is not None:
+            self._setters[vr] = variable.setter
+        self._kinds[vr] = variable.kind
+        self._names[vr] = variable.name
 
     def _param_getter(self, name: str) -> Callable[[], Any]:
         return lambda: self._params[name]
@@ -187,7 +204,7 @@ class SewSlave(Fmi2Slave):
 
     def _outputs_or_nan(self) -> dict[str, Any]:
         """The outputs now; where the model cannot give them (bad parameters, inputs it cannot
-        take), NaN with an fmi2Error log line saying why: a getter has no other way to refuse."""
+        take), NaN with an Error log line saying why: a getter has no other way to refuse."""
         try:
             outputs = self.current_outputs()
         except Exception as err:          # noqa: BLE001 - any failure is reported, none escapes
@@ -218,7 +235,10 @@ class SewSlave(Fmi2Slave):
         return self._model
 
     def _error(self, message: str) -> None:
-        self.log(message, Fmi2Status.error)
+        self.log_error(message)
+
+    def log_error(self, message: str) -> None:
+        raise NotImplementedError("the FMI layer logs")
 
     def _error_once(self, message: str, key: str | None = None) -> None:
         """Log an error, but not the same one (the same `key`) again at every getter call of a
@@ -249,29 +269,23 @@ class SewSlave(Fmi2Slave):
                 return f"input {name} is {value} at t = {self._time:g} s"
         return None
 
-    # --- FMI calls: none lets an exception reach pythonfmu -------------------------------------
-    # pythonfmu's get_real/set_real check every variable's type on every call and raise on a
+    # --- getting and setting, for the layer's calls: none lets an exception reach pythonfmu ----
+    # pythonfmu's getters and setters check every variable's type on every call and raise on a
     # wrong one; these look the getter up directly (the hot path of a co-simulation step) and
     # answer an unknown value reference with a log line
-    def get_real(self, vrs):
+    def get_reals(self, vrs) -> list[float]:
         try:
             return [float(self._real_getters[vr]()) for vr in vrs]
         except Exception:                 # noqa: BLE001 - an unknown reference: answered below
-            return [self._get(vr, Real, float, math.nan) for vr in vrs]
+            return self.get_values(vrs, "Real")
 
-    def get_integer(self, vrs):
-        return [self._get(vr, Integer, int, 0) for vr in vrs]
-
-    def get_boolean(self, vrs):
-        return [self._get(vr, Boolean, bool, False) for vr in vrs]
-
-    def get_string(self, vrs):
-        return [self._get(vr, None, str, "") for vr in vrs]
+    def get_values(self, vrs, kind: str) -> list:
+        convert, missing = _CONVERT[kind]
+        return [self._get(vr, kind, convert, missing) for vr in vrs]
 
     def _get(self, vr, kind, convert, missing):
-        if self._types.get(vr) is not kind:
-            self._error_once(f"fmi2Get{_KIND_NAME.get(kind, 'String')}: no such variable "
-                             f"(value reference {vr})")
+        if self._kinds.get(vr) != kind:
+            self._error_once(f"{self._call(kind, 0)}: no such variable (value reference {vr})")
             return missing
         try:
             return convert(self._getters[vr]())
@@ -279,37 +293,29 @@ class SewSlave(Fmi2Slave):
             self._error_once(f"value reference {vr}: {_describe(err)}")
             return missing
 
-    def set_real(self, vrs, values):
+    def set_reals(self, vrs, values) -> None:
         try:
             setters = [self._real_setters[vr] for vr in vrs]
-        except KeyError:                  # not a settable Real: answered below
-            self._set(vrs, values, Real)
+        except (KeyError, TypeError):     # not a settable Real: answered below
+            self.set_values(vrs, values, "Real")
             return
         for set_value, value in zip(setters, values):
             set_value(value)
 
-    def set_integer(self, vrs, values):
-        self._set(vrs, values, Integer)
-
-    def set_boolean(self, vrs, values):
-        self._set(vrs, values, Boolean)
-
-    def set_string(self, vrs, values):
-        self._set(vrs, values, None)
-
-    def _set(self, vrs, values, kind) -> None:
+    def set_values(self, vrs, values, kind: str) -> None:
         for vr, value in zip(vrs, values):
             setter = self._setters.get(vr)
-            if setter is None or self._types.get(vr) is not kind:
-                name = self.vars[vr].name if vr in self.vars else f"value reference {vr}"
-                self._error(f"fmi2Set{_KIND_NAME.get(kind, 'String')}: {name} cannot be set "
-                            f"this way (value {value!r} ignored)")
+            if setter is None or self._kinds.get(vr) != kind:
+                name = self._names.get(vr, f"value reference {vr}")
+                self._error(f"{self._call(kind, 1)}: {name} cannot be set this way "
+                            f"(value {value!r} ignored)")
                 continue
             setter(value)
 
-    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self._time = float(start_time)
+    def _call(self, kind: str, which: int) -> str:
+        return type(self).call_names.get(kind, ("Get", "Set"))[which]
 
+    # --- the life of an instance ---------------------------------------------------------------
     def exit_initialization_mode(self):
         self._initialized = True
         self._cache = None
@@ -329,9 +335,10 @@ class SewSlave(Fmi2Slave):
         if not (self._initialized and self._broken is None and 0.0 < h < math.inf
                 and abs(t - self._time) <= _TIME_TOLERANCE * max(1.0, abs(t), h)
                 and math.isfinite(sum(self._inputs.values()))):
-            refusal = self._refusal(t, h) or "an input is not a finite number"
-            self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
-            return False
+            refusal = self._refusal(t, h)
+            if refusal:
+                self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
+                return False
         saved = (self.save_internal(), self._elapsed, self._time)
         try:
             self.advance(self.model(), t, h)
@@ -387,8 +394,12 @@ class SewSlave(Fmi2Slave):
             self.restore_internal(internal)
             self._cache = None
         except Exception as err:          # noqa: BLE001 - a damaged or foreign state
-            self._error(f"fmi2SetFMUstate: not a state of this FMU ({_describe(err)}); the "
+            self._error(f"SetFMUState: not a state of this FMU ({_describe(err)}); the "
                         f"instance is left as it was")
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
+        return json.dumps(state).encode("utf-8")
 
     @staticmethod
     def _fmu_state_from_bytes(state: bytes) -> dict[str, Any]:
@@ -416,59 +427,6 @@ class SewSlave(Fmi2Slave):
 
     def restore_internal(self, saved: dict[str, Any]) -> None:
         pass
-
-    # --- modelDescription ----------------------------------------------------------------------
-    def _port_units(self) -> dict[str, str]:
-        units = {p.name: p.unit for p in self._param_info}
-        for port in (*type(self).inputs, *type(self).outputs, *type(self).calculated):
-            units[port.name] = port.unit
-        return units
-
-    def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
-        root = super().to_xml(model_options)
-        units = self._port_units()
-        used = set()
-        # unit attributes on Real variables
-        for sv in root.find("ModelVariables"):
-            real = sv.find("Real")
-            unit = units.get(sv.get("name"))
-            if real is not None and unit is not None:
-                real.set("unit", unit)
-                used.add(unit)
-        # UnitDefinitions go right after CoSimulation (FMI 2.0 schema order)
-        unit_defs = Element("UnitDefinitions")
-        for name in sorted(used):
-            unit = SubElement(unit_defs, "Unit", name=name)
-            SubElement(unit, "BaseUnit", {k: str(v) for k, v in UNITS[name].items()})
-        index = list(root).index(root.find("CoSimulation")) + 1
-        root.insert(index, unit_defs)
-        # ModelStructure: outputs with their input dependencies, and the initial unknowns
-        root.remove(root.find("ModelStructure"))
-        structure = SubElement(root, "ModelStructure")
-        index_of = {v.name: i + 1 for i, v in enumerate(self.vars.values())}
-        input_indices = " ".join(str(index_of[p.name]) for p in type(self).inputs)
-        n_inputs = len(type(self).inputs)
-
-        def unknown(parent, port: Port) -> None:
-            attrib = {"index": str(index_of[port.name])}
-            if port.feedthrough and n_inputs:
-                attrib["dependencies"] = input_indices
-                attrib["dependenciesKind"] = " ".join(["dependent"] * n_inputs)
-            else:
-                attrib["dependencies"] = ""
-                attrib["dependenciesKind"] = ""
-            SubElement(parent, "Unknown", attrib)
-
-        if type(self).outputs:
-            outputs = SubElement(structure, "Outputs")
-            for port in type(self).outputs:
-                unknown(outputs, port)
-        initial = SubElement(structure, "InitialUnknowns")
-        for port in sorted((*type(self).outputs, *type(self).calculated),
-                           key=lambda p: index_of[p.name]):
-            # at initialization every unknown may depend on the parameters and inputs: no list
-            SubElement(initial, "Unknown", {"index": str(index_of[port.name])})
-        return root
 
 
 class LinkageSlave(SewSlave):
@@ -498,7 +456,11 @@ def _pick(value, path: tuple[str, ...]):
     return value
 
 
-_KIND_NAME = {Real: "Real", Integer: "Integer", Boolean: "Boolean"}
+# kind -> (conversion of a got value, the answer for a reference of another kind)
+_CONVERT: dict[str, tuple[Callable[[Any], Any], Any]] = {
+    "Real": (float, math.nan), "Integer": (int, 0), "Boolean": (bool, False), "String": (str, ""),
+    "Int64": (int, 0), "UInt64": (int, 0),             # FMI 3.0 kinds no sewfmu variable has
+}
 
 
 def _describe(err: Exception) -> str:

@@ -1,0 +1,177 @@
+"""The FMI 3.0 layer of a sewfmu FMU, on pythonfmu3: the same variables, units, descriptions,
+structure and default experiment as the FMI 2.0 layer, in FMI 3.0's terms (Float64, Int32,
+value references in ModelStructure, an independent variable `time`).
+
+pythonfmu3 0.3.4 is used for its binary and its builder only: the variables are not its
+objects (its own modelDescription writes every co-simulation option with the value of the last
+common one, and its getters raise on a wrong reference, which its binary turns into Fatal).
+Its binary drops the arguments of fmi3EnterInitializationMode, so the start time is not known
+before the first doStep: that step's communication point is taken as the start (FMI 3.0 has
+the first doStep begin at the start time)."""
+from __future__ import annotations
+
+import ctypes
+import datetime
+import math
+import uuid
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu3.enums import Fmi3Status
+from pythonfmu3.fmi3slave import Fmi3Slave, Fmi3StepResult
+
+from .slave import SewSlave, Variable
+from .units import UNITS
+
+_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
+_STEPPED = Fmi3StepResult(status=Fmi3Status.ok)
+_DISCARDED = Fmi3StepResult(status=Fmi3Status.discard)
+
+
+class Fmi3Layer(SewSlave, Fmi3Slave):
+    """Joined after a concrete sewfmu slave class: `class MainShaft(MainShaftSlave, Fmi3Layer)`."""
+
+    call_names = {"Real": ("fmi3GetFloat64", "fmi3SetFloat64"),
+                  "Integer": ("fmi3GetInt32", "fmi3SetInt32"),
+                  "Boolean": ("fmi3GetBoolean", "fmi3SetBoolean"),
+                  "String": ("fmi3GetString", "fmi3SetString"),
+                  "Int64": ("fmi3GetInt64", "fmi3SetInt64"),
+                  "UInt64": ("fmi3GetUInt64", "fmi3SetUInt64")}
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._start_known = False      # see the module docstring
+
+    def register_all(self) -> None:
+        # value reference 0 is the independent variable, as in the Modelica Reference FMUs
+        self.remember(0, Variable("time", "Real", "independent", "simulation time [s]", "s",
+                                  lambda: self._time))
+        for vr, v in enumerate(self.variables, start=1):
+            self.remember(vr, v)
+
+    def log_error(self, message: str) -> None:
+        self.log(message, Fmi3Status.error)
+
+    def do_step(self, current_time, step_size):
+        if not self._start_known and self._initialized and math.isfinite(current_time):
+            self._start_known = True
+            self._time = float(current_time)
+        # pythonfmu3's binary asks the result for `status` and `terminateSimulation`: a bool has
+        # neither, and each failed lookup raises (and clears) an AttributeError in C
+        return _STEPPED if super().do_step(current_time, step_size) else _DISCARDED
+
+    def _get_fmu_state(self):
+        return {**super()._get_fmu_state(), "start_known": self._start_known}
+
+    def _set_fmu_state(self, state):
+        super()._set_fmu_state(state)
+        self._start_known = bool(state.get("start_known", True)) if isinstance(state, dict) \
+            else self._start_known
+
+    # pythonfmu3's calls, answered by SewSlave without an exception (the Float64 ones, made at
+    # every step, are SewSlave's own methods under pythonfmu3's names: no call in between)
+    get_float64 = SewSlave.get_reals
+    set_float64 = SewSlave.set_reals
+
+    def get_int32(self, vrs):
+        return self.get_values(vrs, "Integer")
+
+    def get_int64(self, vrs):
+        return self.get_values(vrs, "Int64")
+
+    def get_uint64(self, vrs):
+        return [ctypes.c_uint64(x) for x in self.get_values(vrs, "UInt64")]
+
+    def get_boolean(self, vrs):
+        return self.get_values(vrs, "Boolean")
+
+    def get_string(self, vrs):
+        return self.get_values(vrs, "String")
+
+    def set_int32(self, vrs, values):
+        self.set_values(vrs, values, "Integer")
+
+    def set_int64(self, vrs, values):
+        self.set_values(vrs, values, "Int64")
+
+    def set_uint64(self, vrs, values):
+        self.set_values(vrs, values, "UInt64")
+
+    def set_boolean(self, vrs, values):
+        self.set_values(vrs, values, "Boolean")
+
+    def set_string(self, vrs, values):
+        self.set_values(vrs, values, "String")
+
+    # --- modelDescription ----------------------------------------------------------------------
+    def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
+        cls = type(self)
+        root = Element("fmiModelDescription", {
+            "fmiVersion": "3.0", "modelName": self.modelName,
+            "instantiationToken": f"{{{uuid.uuid4()}}}", "description": self.description,
+            "author": cls.author, "version": str(getattr(cls, "version", "")),
+            "license": cls.license, "generationTool": "sewfmu (pythonfmu3 0.3.4)",
+            "generationDateAndTime":
+                datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "variableNamingConvention": "flat"})
+        SubElement(root, "CoSimulation", {
+            "modelIdentifier": self.modelName,
+            # the FMU embeds the interpreter in the host's process: a library it needs, not a
+            # tool it couples to
+            "needsExecutionTool": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
+            "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
+            "canHandleVariableCommunicationStepSize": "true"})
+        variables = [(0, self._time_variable()), *enumerate(self.variables, start=1)]
+        unit_defs = SubElement(root, "UnitDefinitions")
+        for name in sorted({v.unit for _, v in variables if v.kind == "Real"}):
+            unit = SubElement(unit_defs, "Unit", name=name)
+            SubElement(unit, "BaseUnit", {k: str(x) for k, x in UNITS[name].items()})
+        categories = SubElement(root, "LogCategories")
+        for name, text in cls.log_categories.items():
+            SubElement(categories, "Category", name=name, description=text)
+        stop, step = cls.experiment
+        SubElement(root, "DefaultExperiment", startTime="0.0", stopTime=repr(float(stop)),
+                   stepSize=repr(float(step)))
+        listed = SubElement(root, "ModelVariables")
+        for vr, v in variables:
+            SubElement(listed, _TYPES[v.kind], self._attributes(vr, v))
+        structure = SubElement(root, "ModelStructure")
+        inputs = [str(vr) for vr, v in variables if v.causality == "input"]
+        for vr, v in variables:
+            if v.causality == "output":
+                attrib = {"valueReference": str(vr), "dependencies": "", "dependenciesKind": ""}
+                if v.feedthrough and inputs:
+                    attrib["dependencies"] = " ".join(inputs)
+                    attrib["dependenciesKind"] = " ".join(["dependent"] * len(inputs))
+                SubElement(structure, "Output", attrib)
+        for vr, v in variables:
+            if v.causality in ("output", "calculatedParameter"):
+                SubElement(structure, "InitialUnknown", valueReference=str(vr))
+        return root
+
+    @staticmethod
+    def _time_variable() -> Variable:
+        return Variable("time", "Real", "independent", "simulation time [s]", "s", lambda: 0.0)
+
+    @staticmethod
+    def _attributes(vr: int, v: Variable) -> dict[str, str]:
+        attrib = {"name": v.name, "valueReference": str(vr), "description": v.description,
+                  "causality": v.causality}
+        if v.causality == "independent":
+            attrib["variability"] = "continuous"
+        elif v.causality == "output":
+            attrib["variability"] = "discrete" if v.kind == "Boolean" else "continuous"
+            attrib["initial"] = "calculated"
+        elif v.causality == "calculatedParameter":
+            attrib["variability"] = "fixed"
+            attrib["initial"] = "calculated"
+        elif v.causality == "input":
+            attrib["variability"] = "continuous"
+        else:
+            attrib["variability"] = "fixed"
+        if v.kind == "Real":
+            attrib["unit"] = v.unit
+        if v.causality in ("input", "parameter"):
+            start = v.getter()
+            attrib["start"] = ("true" if start else "false") if v.kind == "Boolean" \
+                else repr(int(start) if v.kind == "Integer" else float(start))
+        return attrib
