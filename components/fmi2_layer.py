@@ -79,15 +79,18 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
     # --- modelDescription ----------------------------------------------------------------------
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
         root = super().to_xml(model_options)
-        units = {v.name: v.unit for v in self.variables}
+        declared = {v.name: v for v in self.variables}
         used = set()
-        # unit attributes on Real variables
+        # unit attributes on Real variables; start values written exactly (pythonfmu writes 16
+        # significant digits, which a host that sets the start values reads back 1 ulp off)
         for sv in root.find("ModelVariables"):
             real = sv.find("Real")
-            unit = units.get(sv.get("name"))
-            if real is not None and unit is not None:
-                real.set("unit", unit)
-                used.add(unit)
+            v = declared.get(sv.get("name"))
+            if real is not None and v is not None:
+                real.set("unit", v.unit)
+                used.add(v.unit)
+                if real.get("start") is not None:
+                    real.set("start", repr(float(v.getter())))
         # UnitDefinitions go right after CoSimulation (FMI 2.0 schema order)
         unit_defs = Element("UnitDefinitions")
         for name in sorted(used):
