@@ -33,7 +33,12 @@ def _run_libcosim(ssp: str, step: float, stop: float, record: list[str]):
 
     log_output_level(CosimLogLevel.WARNING)
     step_ns = round(step * 1e9)            # libcosim counts time in whole nanoseconds
-    execution = CosimExecution.from_ssp_file(ssp, step_size=step_ns)
+    try:
+        execution = CosimExecution.from_ssp_file(ssp, step_size=step_ns)
+    except AssertionError:          # libcosimpy asserts; libcosim's own message says why
+        from libcosimpy._internal import get_last_error_message
+        raise HostError(f"libcosim could not load the system: {get_last_error_message()}") \
+            from None
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
     readers = []

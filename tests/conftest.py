@@ -6,7 +6,7 @@ import os
 import pytest
 from hypothesis import settings
 
-from components.build import build_all
+from components.build import build_all, default_fmu_dir
 
 # Property tests draw the same examples on every run ("ci", the default), so that a red CI names a
 # real, reproducible failure; HYPOTHESIS_PROFILE=explore draws new ones, many more of them.
@@ -28,8 +28,8 @@ def fmu_paths(fmu_dir):
 
 
 @pytest.fixture(scope="session")
-def fmu3_dir(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("fmus3")
+def fmu3_dir(fmu_dir):
+    folder = default_fmu_dir(3, fmu_dir)      # where a run with experiment.fmi = 3 looks
     build_all(folder, fmi=3)
     return folder
 

@@ -53,18 +53,31 @@ def test_ssp_export_is_valid_and_complete(tmp_path):
     assert 'name="omega0"' in text and 'value="250.0"' in text and 'value="4.0"' in text
 
 
-@pytest.mark.parametrize("host", ["libcosim", "ecos", "ecos-cli"])
-def test_other_hosts_give_the_same_figures(tmp_path, host):
+@pytest.mark.parametrize("host, fmi", [("libcosim", 2), ("ecos", 2), ("ecos-cli", 2),
+                                       ("ecos", 3), ("ecos-cli", 3)])
+def test_other_hosts_give_the_same_figures(tmp_path, host, fmi, fmu3_dir):
     """libcosim and ecos are plain fixed-step Jacobi masters that read outputs right after the
-    step; ecos-cli hosts the FMUs in a process that is not Python."""
+    step; ecos-cli hosts the FMUs in a process that is not Python. ecos runs the FMI 3.0 FMUs
+    too."""
+    scenario = load("punch_drive")
+    scenario.set_value("experiment.fmi", fmi)
     rows = {key: (own, other) for key, own, other, _ in
-            crosscheck(load("punch_drive"), host, tmp_path / host)}
+            crosscheck(scenario, host, tmp_path / host)}
     assert rows["n_contacts"][0] == rows["n_contacts"][1] == 1
     for key in FIGURES_DEG:
         assert abs(rows[key][0] - rows[key][1]) < 1.0, (key, rows[key])
     for key in FIGURES_N:
         assert abs(rows[key][0] - rows[key][1]) < 0.3, (key, rows[key])
     assert (tmp_path / host / "results.csv").exists() and (tmp_path / host / "summary.json").exists()
+
+
+def test_libcosim_refuses_fmi3_fmus_in_one_clear_line(tmp_path, capsys, fmu3_dir):
+    """libcosim (libcosimpy 0.0.6) runs FMI 1.0 and 2.0 only: said so, naming the FMU."""
+    assert main(["crosscheck", "punch_drive", "--host", "libcosim", "--set",
+                 "experiment.fmi=3", "--out", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "Unsupported FMI version" in err and ".fmu" in err, err
 
 
 def test_a_non_python_host_without_its_environment_gets_a_clear_message(capsys, monkeypatch):
@@ -99,15 +112,16 @@ def test_a_changed_fmu_is_caught_by_its_reference(tmp_path):
 
 
 @pytest.mark.parametrize("name", list(FMUS))
-def test_fmutool_check_passes(fmu_paths, name):
+def test_fmutool_check_passes(fmus, name):
     tool = Path(sys.executable).parent / "fmutool"
     if not tool.exists():
         pytest.skip("fmu-manipulation-toolbox is not installed")
-    proc = subprocess.run([str(tool), "-input", str(fmu_paths[name]), "-check"],
+    proc = subprocess.run([str(tool), "-input", str(fmus[name]), "-check"],
                           capture_output=True, text=True, timeout=120)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out
-    assert "compliant with FMI-2.0" in out and "No semantic error" in out, out
+    version = "3.0" if "fmi3" in fmus[name].parts else "2.0"
+    assert f"compliant with FMI-{version}" in out and "No semantic error" in out, out
     assert "ERROR" not in out
 
 
@@ -135,7 +149,7 @@ def test_references_work_from_a_plain_install_in_any_folder(tmp_path):
                           env=env, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     from components.catalogue import FMUS
-    assert f"all {len(FMUS)} FMUs match their references" in proc.stdout
+    assert f"all {len(FMUS)} FMI 2.0 FMUs match their references" in proc.stdout
     # every package of the source tree is installed (a package missing from pyproject's list
     # would import here from nowhere)
     packages = sorted(str(p.parent.relative_to(repo)).replace("/", ".")
