@@ -7,6 +7,7 @@
    doStep, getReal with value references resolved beforehand) on the same trivial FMUs.
 3. time to accuracy: the error of F2_weld_mean and of the contact duration against the wall time
    as the communication step changes, Jacobi and Gauss–Seidel (also drawn: bench/time_to_accuracy.png).
+4. the FMI 3.0 FMUs against the FMI 2.0 ones: the same runs (same numbers), wall time of the run.
 
     .venv/bin/python bench/performance.py [--repeat N]
 """
@@ -203,6 +204,26 @@ def _plot(rows) -> None:
     plt.close(fig)
 
 
+def fmi_versions(repeat: int) -> None:
+    """The same scenarios with the FMI 2.0 and the FMI 3.0 FMUs, alternating; medians."""
+    print("4. FMI 2.0 against FMI 3.0 FMUs (same model code, same numbers), wall time of the run")
+    print("| scenario | FMI 2.0 [s] | FMI 3.0 [s] | ratio 3.0 / 2.0 |\n|---|---|---|---|")
+    for name in ("punch_drive", "punch_split"):
+        runs = {2: [], 3: []}
+        for fmi in (2, 3):                           # built and loaded outside the timing
+            scenario = load(name)
+            scenario.set_value("experiment.fmi", fmi)
+            simulate(scenario)
+        for _ in range(repeat):
+            for fmi in (2, 3):
+                scenario = load(name)
+                scenario.set_value("experiment.fmi", fmi)
+                runs[fmi].append(simulate(scenario).wall_time)
+        a, b = statistics.median(runs[2]), statistics.median(runs[3])
+        print(f"| {name} | {a:.3f} | {b:.3f} | {b / a:.2f} |")
+    print()
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=5)
@@ -210,6 +231,7 @@ def main():
     whole_process(args.repeat)
     master_overhead()
     time_to_accuracy()
+    fmi_versions(args.repeat)
 
 
 if __name__ == "__main__":

@@ -23,10 +23,11 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
-# The installed pythonfmu, imported before any FMU is instantiated in this process: an FMU imports
-# the pythonfmu it finds, and if that were its embedded copy (no binaries), that copy would stay
-# in sys.modules and serve the builds made afterwards.
+# The installed pythonfmu and pythonfmu3, imported before any FMU is instantiated in this process:
+# an FMU imports the pythonfmu(3) it finds, and if that were its embedded copy (no binaries), that
+# copy would stay in sys.modules and serve the builds made afterwards.
 import pythonfmu  # noqa: F401
+import pythonfmu3  # noqa: F401
 
 from .catalogue import FMI_VERSIONS, FMUS
 
@@ -137,7 +138,6 @@ def current_version() -> str:
 
 def _builder(fmi: int):
     if fmi == 3:
-        # imported before the build for the reason pythonfmu is imported above
         from pythonfmu3.builder import FmuBuilder
     else:
         from pythonfmu.builder import FmuBuilder

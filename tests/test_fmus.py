@@ -287,18 +287,23 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
     assert "binaries/linux64/MainShaft.so" in zipfile.ZipFile(path).namelist()
 
 
-def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_dir, tmp_path):
-    """The first FMU a process loads must not leave its embedded pythonfmu (no binaries) in
-    sys.modules for the builder: run punch_drive, then build, in one fresh process."""
+@pytest.mark.parametrize("fmi, binary", [(2, "binaries/linux64/MainShaft.so"),
+                                         (3, "binaries/x86_64-linux/MainShaft.so")])
+def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_dir, fmu3_dir,
+                                                                          tmp_path, fmi, binary):
+    """The first FMU a process loads must not leave its embedded pythonfmu or pythonfmu3 (no
+    binaries) in sys.modules for the builder: run punch_drive, then build, in one fresh
+    process."""
+    folder = fmu3_dir if fmi == 3 else fmu_dir
     code = (f"import zipfile\n"
             f"from pathlib import Path\n"
             f"from scenarios.format import load\n"
             f"from scenarios.master import run\n"
             f"from components.build import build_fmu\n"
             f"sc = load('punch_drive'); sc.revolutions = 1\n"
-            f"run(sc, {{p.stem: p for p in Path({str(fmu_dir)!r}).glob('*.fmu')}})\n"
-            f"path = build_fmu('MainShaft', Path({str(tmp_path)!r}))\n"
-            f"print('binaries/linux64/MainShaft.so' in zipfile.ZipFile(path).namelist())\n")
+            f"run(sc, {{p.stem: p for p in Path({str(folder)!r}).glob('*.fmu')}})\n"
+            f"path = build_fmu('MainShaft', Path({str(tmp_path)!r}), fmi={fmi})\n"
+            f"print({binary!r} in zipfile.ZipFile(path).namelist())\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=300, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
