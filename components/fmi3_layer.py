@@ -59,13 +59,11 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
         # neither, and each failed lookup raises (and clears) an AttributeError in C
         return _STEPPED if super().do_step(current_time, step_size) else _DISCARDED
 
-    def _get_fmu_state(self):
-        return {**super()._get_fmu_state(), "start_known": self._start_known}
+    def save_layer(self):
+        return {"start_known": self._start_known}
 
-    def _set_fmu_state(self, state):
-        super()._set_fmu_state(state)
-        self._start_known = bool(state.get("start_known", True)) if isinstance(state, dict) \
-            else self._start_known
+    def restore_layer(self, saved):
+        self._start_known = bool(saved["start_known"])
 
     # pythonfmu3's calls, answered by SewSlave without an exception (the Float64 ones, made at
     # every step, are SewSlave's own methods under pythonfmu3's names: no call in between)

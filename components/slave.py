@@ -378,13 +378,14 @@ class SewSlave:
     def _get_fmu_state(self) -> dict[str, Any]:
         return {"params": dict(self._params), "inputs": dict(self._inputs),
                 "elapsed": self._elapsed, "time": self._time, "initialized": self._initialized,
-                "broken": self._broken, "internal": self.save_internal()}
+                "broken": self._broken, "internal": self.save_internal(),
+                "layer": self.save_layer()}
 
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
         try:
             if state["params"] != self._params:
                 self._model = None
-            internal = state["internal"]
+            internal, layer = state["internal"], state["layer"]   # a foreign state fails here
             self._params = dict(state["params"])
             self._inputs = dict(state["inputs"])
             self._elapsed = state["elapsed"]
@@ -392,6 +393,7 @@ class SewSlave:
             self._initialized = state["initialized"]
             self._broken = state["broken"]
             self.restore_internal(internal)
+            self.restore_layer(layer)
             self._cache = None
         except Exception as err:          # noqa: BLE001 - a damaged or foreign state
             self._error(f"SetFMUState: not a state of this FMU ({_describe(err)}); the "
@@ -407,6 +409,13 @@ class SewSlave:
             return json.loads(state.decode("utf-8"))
         except Exception as err:          # noqa: BLE001 - refused by _set_fmu_state
             return {"unreadable": _describe(err)}
+
+    def save_layer(self) -> dict[str, Any]:
+        """What the FMI layer keeps of its own, as plain JSON-able values."""
+        return {}
+
+    def restore_layer(self, saved: dict[str, Any]) -> None:
+        pass
 
     # --- what each FMU provides ----------------------------------------------------------------
     def build_model(self, params):
