@@ -4,9 +4,9 @@ named copy of the model code.
 pythonfmu imports an FMU's scripts by module name into the host's Python. If every FMU carried a
 package called `components`, the first one loaded (or the repository's own package) would serve
 them all, and a rebuilt FMU would run old code. So the package is copied into the FMU under a
-name that contains the hash of its source, `sewfmu_<hash>` (`sewfmu3_<hash>` for FMI 3.0, which
-carries the other FMI layer), and the slave script is named after the model and that hash. Same
-code, same name (safe to share); different code, different name.
+name that contains the hash of its source, `sewfmu_<hash>` (`sewfmu3_<hash>` for FMI 3.0: the two
+carry different FMI layers and may run in one process), and the slave script is named after the
+model and that hash. Same code, same name (safe to share); different code, different name.
 
 An FMU is a concrete slave class of the model code joined with one FMI layer in the script:
 `class MainShaft(MainShaftSlave, Fmi2Layer)`.

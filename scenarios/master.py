@@ -192,6 +192,7 @@ class FmuInstance:
     references resolved; the scenario declares it as a format.Instance. Fmu3Instance runs an
     FMI 3.0 FMU the same way: `for_fmu` picks by the modelDescription's fmiVersion."""
 
+    FMU_CLASS = FMU2Slave
     BOOLEAN = fmi2Boolean
     # the FMI functions, by what they do
     CALLS = {"set_real": "fmi2SetReal", "get_real": "fmi2GetReal",
@@ -218,8 +219,6 @@ class FmuInstance:
         self.real_out: list[str] = []       # outputs read every step, in order
         self.bool_out: list[str] = []
         self.inputs: list[tuple[str, "FmuInstance", str]] = []   # (input, source unit, source output)
-
-    FMU_CLASS = FMU2Slave
 
     def variable(self, var: str, causality: tuple[str, ...], what: str):
         v = self.variables.get(var)

@@ -60,7 +60,8 @@ def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
         "experiment": {"step": scenario.step, "master": scenario.master,
                        "stop_time": scenario.stop_time, "revolutions": scenario.revolutions,
                        "shaft": scenario.shaft, "record_every": scenario.record_every,
-                       "tolerance": scenario.tolerance, "acceleration": scenario.acceleration},
+                       "tolerance": scenario.tolerance, "acceleration": scenario.acceleration,
+                       "fmi": scenario.fmi},
         "fmus": {fmu: fmu_version(Path(path)) for fmu, path in sorted(fmu_paths.items())},
     }
     return json.dumps(content, sort_keys=True, default=repr)

@@ -142,6 +142,9 @@ def test_an_edited_scenario_file_or_other_fmu_code_makes_other_points(tmp_path, 
     edited = _scenario()
     edited.step = 1.25e-4
     assert settings_of(edited, fmu_paths) != base
+    fmi3 = _scenario()
+    fmi3.set_value("experiment.fmi", 3)                # the same numbers, but other FMUs
+    assert settings_of(fmi3, fmu_paths) != base
     # the same FMU with other code (its modelDescription's version carries the code hash)
     other = tmp_path / "PunchContact.fmu"
     with zipfile.ZipFile(fmu_paths["PunchContact"]) as src, zipfile.ZipFile(other, "w") as dst:

@@ -159,3 +159,13 @@ def test_sewfmu_build_fmi3_writes_into_the_fmi3_folder(tmp_path):
     built = sorted(p.name for p in (tmp_path / "fmi3").glob("*.fmu"))
     assert built == sorted(f"{name}.fmu" for name in FMUS)
     assert not list(tmp_path.glob("*.fmu"))          # the FMI 2.0 ones are not touched
+
+
+@pytest.mark.parametrize("value", ["4", "true", "2.5", "\"3\""])
+def test_another_fmi_version_is_one_clear_line(capsys, tmp_path, value):
+    from scenarios.cli import main
+    assert main(["run", "punch_drive", "--set", f"experiment.fmi={value}",
+                 "--out", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "experiment.fmi" in err and "2 or 3" in err, err
+    assert not (tmp_path / "out").exists()
