@@ -43,8 +43,9 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
 
     def register_all(self) -> None:
         # value reference 0 is the independent variable, as in the Modelica Reference FMUs
-        self.remember(0, Variable("time", "Real", "independent", "simulation time [s]", "s",
-                                  lambda: self._time))
+        self._independent = Variable("time", "Real", "independent", "simulation time [s]", "s",
+                                     lambda: self._time)
+        self.remember(0, self._independent)
         for vr, v in enumerate(self.variables, start=1):
             self.remember(vr, v)
 
@@ -118,7 +119,7 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             "needsExecutionTool": "false", "canBeInstantiatedOnlyOncePerProcess": "false",
             "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
             "canHandleVariableCommunicationStepSize": "true"})
-        variables = [(0, self._time_variable()), *enumerate(self.variables, start=1)]
+        variables = [(0, self._independent), *enumerate(self.variables, start=1)]
         unit_defs = SubElement(root, "UnitDefinitions")
         for name in sorted({v.unit for _, v in variables if v.kind == "Real"}):
             unit = SubElement(unit_defs, "Unit", name=name)
@@ -145,10 +146,6 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             if v.causality in ("output", "calculatedParameter"):
                 SubElement(structure, "InitialUnknown", valueReference=str(vr))
         return root
-
-    @staticmethod
-    def _time_variable() -> Variable:
-        return Variable("time", "Real", "independent", "simulation time [s]", "s", lambda: 0.0)
 
     @staticmethod
     def _attributes(vr: int, v: Variable) -> dict[str, str]:
