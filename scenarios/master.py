@@ -298,13 +298,25 @@ class FmuInstance:
     # µs per call); a failure marks the instance, so that no further call is made on it ---------
     def bind(self) -> None:
         """Resolve the raw FMI functions once the instance exists, with their arguments."""
-        raw = self.fmu._functions
-        self.component = c = self.fmu.component
-        self._set_reals = partial(raw["fmi2SetReal"], c, self.in_vr, self.n_in, self.in_buf)
-        self._get_reals = partial(raw["fmi2GetReal"], c, self.out_vr, self.n_out, self.out_buf)
-        self._get_booleans = partial(raw["fmi2GetBoolean"], c, self.bool_vr, self.n_bool,
-                                     self.bool_buf)
-        self._do_step = partial(raw["fmi2DoStep"], c)
+        self.component = self.fmu.component
+        self._set_reals = self._batched("set_real", self.in_vr, self.n_in, self.in_buf)
+        self._get_reals = self._batched("get_real", self.out_vr, self.n_out, self.out_buf)
+        self._get_booleans = self._batched("get_boolean", self.bool_vr, self.n_bool,
+                                           self.bool_buf)
+        self._do_step = self._bound_step(self.fmu._functions[self.CALLS["do_step"]])
+
+    # FMI 3.0's batched getters and setters take the number of values after the values
+    VALUES_COUNTED = False
+
+    def _batched(self, call: str, vrs, n: int, values):
+        """A raw get or set call with all its arguments bound: calling it makes the call."""
+        counted = (n,) if self.VALUES_COUNTED else ()
+        return partial(self.fmu._functions[self.CALLS[call]], self.component, vrs, n, values,
+                       *counted)
+
+    def _bound_step(self, step):
+        """doStep(t, h, noSetFMUStatePriorToCurrentPoint) on this instance."""
+        return partial(step, self.component)
 
     def raw_state_calls(self) -> tuple:
         """The raw get, set and free FMU state functions (for SavedStates)."""
@@ -411,22 +423,16 @@ class Fmu3Instance(FmuInstance):
     def set_state(self, state) -> None:
         self.fmu.setFMUState(state)
 
-    def bind(self) -> None:
-        raw = self.fmu._functions
-        self.component = c = self.fmu.component
-        self._set_reals = partial(raw["fmi3SetFloat64"], c, self.in_vr, self.n_in, self.in_buf,
-                                  self.n_in)
-        self._get_reals = partial(raw["fmi3GetFloat64"], c, self.out_vr, self.n_out,
-                                  self.out_buf, self.n_out)
-        self._get_booleans = partial(raw["fmi3GetBoolean"], c, self.bool_vr, self.n_bool,
-                                     self.bool_buf, self.n_bool)
+    VALUES_COUNTED = True
+
+    def _bound_step(self, step):
         # doStep's results: event handling needed, terminate, early return, last successful
         # time (sewfmu's masters use no event mode and allow no early return)
         self._step_results = [fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()]
         refs = [ctypes.byref(x) for x in self._step_results]
-        step = raw["fmi3DoStep"]
+        c = self.component
         # noSetFMUStatePriorToCurrentPoint is false: the iterative and adaptive masters do
-        self._do_step = lambda t, h, _: step(c, t, h, False, *refs)
+        return lambda t, h, _: step(c, t, h, False, *refs)
 
 
 class Master:

@@ -10,7 +10,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
-from scenarios.master import LogCollector, extracted_fmu, release_at_exit
+from scenarios.master import LogCollector, extracted_fmu, kind_of, release_at_exit
 
 OPEN_HOSTS: list["Host"] = []
 
@@ -19,7 +19,7 @@ class Host:
     def __init__(self, path, name="inst"):
         unzip_dir, self.md = extracted_fmu(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.types = {v.name: kind_of(v) for v in self.md.modelVariables}   # FMI 2.0's words
         self.log = LogCollector()
         self.failed = False
         fmi3 = self.md.fmiVersion.startswith("3")
@@ -58,7 +58,7 @@ class Host:
 
     def set(self, **values):
         for name, value in values.items():
-            if self.types[name] in ("Integer", "Int32"):
+            if self.types[name] == "Integer":
                 self.fmu.setInteger([self.vr[name]], [int(value)])
             else:
                 self.fmu.setReal([self.vr[name]], [float(value)])
