@@ -47,7 +47,7 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
             self.register_variable(var)
             self.remember(var.value_reference, v)
 
-    def log_error(self, message: str) -> None:
+    def _error(self, message: str) -> None:
         self.log(message, Fmi2Status.error)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):

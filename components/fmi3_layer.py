@@ -49,7 +49,7 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
         for vr, v in enumerate(self.variables, start=1):
             self.remember(vr, v)
 
-    def log_error(self, message: str) -> None:
+    def _error(self, message: str) -> None:
         self.log(message, Fmi3Status.error)
 
     def do_step(self, current_time, step_size):

@@ -91,7 +91,7 @@ class Variable:
 
 class SewSlave:
     """Base of every sewfmu FMU; see the module docstring for what it adds to pythonfmu. An FMI
-    layer comes after it in the class's bases and provides `log_error(message)`, the register
+    layer comes after it in the class's bases and provides `_error(message)`, the register
     of `self.variables` and the names of its calls (`call_names`)."""
 
     author = "sewfmu"
@@ -235,9 +235,7 @@ class SewSlave:
         return self._model
 
     def _error(self, message: str) -> None:
-        self.log_error(message)
-
-    def log_error(self, message: str) -> None:
+        """Log an Error line (the FMI layer logs in its version's terms)."""
         raise NotImplementedError("the FMI layer logs")
 
     def _error_once(self, message: str, key: str | None = None) -> None:
