@@ -12,7 +12,7 @@ from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real
 
 from .slave import SewSlave
-from .units import UNITS
+from .units import range_attributes, unit_definitions
 
 _TYPES = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
 
@@ -25,7 +25,7 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        stop, step = type(self).experiment
+        stop, step = type(self).whole_step_experiment()
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=stop,
                                                     step_size=step)
 
@@ -87,15 +87,18 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
             real = sv.find("Real")
             v = declared.get(sv.get("name"))
             if real is not None and v is not None:
-                real.set("unit", v.unit)
+                for key, value in range_attributes(v).items():
+                    real.set(key, value)
                 used.add(v.unit)
                 if real.get("start") is not None:
                     real.set("start", repr(float(v.getter())))
+            integer = sv.find("Integer")
+            if integer is not None and v is not None:
+                for key, value in range_attributes(v).items():
+                    integer.set(key, value)
         # UnitDefinitions go right after CoSimulation (FMI 2.0 schema order)
         unit_defs = Element("UnitDefinitions")
-        for name in sorted(used):
-            unit = SubElement(unit_defs, "Unit", name=name)
-            SubElement(unit, "BaseUnit", {k: str(v) for k, v in UNITS[name].items()})
+        unit_definitions(unit_defs, used)
         index = list(root).index(root.find("CoSimulation")) + 1
         root.insert(index, unit_defs)
         # ModelStructure: outputs with their input dependencies, and the initial unknowns

@@ -20,7 +20,7 @@ from pythonfmu3.enums import Fmi3Status
 from pythonfmu3.fmi3slave import Fmi3Slave, Fmi3StepResult
 
 from .slave import SewSlave, Variable
-from .units import UNITS
+from .units import range_attributes, unit_definitions
 
 _TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
 _STEPPED = Fmi3StepResult(status=Fmi3Status.ok)
@@ -121,13 +121,11 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             "canHandleVariableCommunicationStepSize": "true"})
         variables = [(0, self._independent), *enumerate(self.variables, start=1)]
         unit_defs = SubElement(root, "UnitDefinitions")
-        for name in sorted({v.unit for _, v in variables if v.kind == "Real"}):
-            unit = SubElement(unit_defs, "Unit", name=name)
-            SubElement(unit, "BaseUnit", {k: str(x) for k, x in UNITS[name].items()})
+        unit_definitions(unit_defs, {v.unit for _, v in variables if v.kind == "Real"})
         categories = SubElement(root, "LogCategories")
         for name, text in cls.log_categories.items():
             SubElement(categories, "Category", name=name, description=text)
-        stop, step = cls.experiment
+        stop, step = cls.whole_step_experiment()
         SubElement(root, "DefaultExperiment", startTime="0.0", stopTime=repr(float(stop)),
                    stepSize=repr(float(step)))
         listed = SubElement(root, "ModelVariables")
@@ -163,8 +161,7 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             attrib["variability"] = "continuous"
         else:
             attrib["variability"] = "fixed"
-        if v.kind == "Real":
-            attrib["unit"] = v.unit
+        attrib.update(range_attributes(v))
         if v.causality in ("input", "parameter"):
             start = v.getter()
             attrib["start"] = ("true" if start else "false") if v.kind == "Boolean" \

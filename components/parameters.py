@@ -19,6 +19,17 @@ CHOICE = "choice"           # an integer from `choices`
 
 _RANGE_TEXT = {POSITIVE: "> 0", NONNEGATIVE: ">= 0", FRACTION: "in (0, 1)"}
 
+# The largest magnitude a parameter of each unit has in a sewing machine's mechanism: a value
+# beyond it is a slip of the unit (110 for an angle meant in degrees, 63 for a mass meant in
+# grams, 3 for a length meant in millimetres), refused rather than run. It is the declared
+# max (min: its negative, or 0 for a positive quantity) in the modelDescription.
+MACHINE_SCALE: dict[str, float] = {
+    "m": 1.0, "kg": 50.0, "rad": 2 * math.pi, "rad/s": 2000.0, "s": 60.0, "N": 1e4,
+    "N/m": 1e9, "N.s/m": 1e6, "N.m2": 1e7, "kg.m2": 10.0,
+}
+# how a value of that unit is usually meant when it is too large: the hint of the error
+_MEANT = {"m": "mm", "kg": "g", "rad": "deg", "rad/s": "rpm"}
+
 
 class ParameterError(ValueError):
     """A parameter value that the model cannot run with; `.name` is the parameter's name."""
@@ -48,6 +59,18 @@ class ParameterInfo:
     def is_integer(self) -> bool:
         return self.allowed == CHOICE
 
+    @property
+    def bounds(self) -> tuple[float | None, float | None]:
+        """The declared (min, max): the allowed sign and the machine's scale of the unit."""
+        if self.allowed == CHOICE:
+            return min(self.choices), max(self.choices)
+        if self.allowed == FRACTION:
+            return 0.0, 1.0
+        scale = MACHINE_SCALE.get(self.unit)
+        low = -scale if (self.allowed == ANY and scale is not None) else \
+            (None if self.allowed == ANY else 0.0)
+        return low, scale
+
 
 def parameter_info(params_class) -> list[ParameterInfo]:
     """The declared parameters of a parameter dataclass, in declaration order."""
@@ -71,6 +94,12 @@ def check_value(info: ParameterInfo, value: Any) -> None:
     if not ok:
         raise ParameterError(info.name, f"must be {_RANGE_TEXT[info.allowed]} {info.unit}, "
                                         f"got {value}")
+    low, high = info.bounds
+    if high is not None and not (low <= value <= high):
+        meant = _MEANT.get(info.unit)
+        hint = (f" (meant in {meant}? give the unit: \"{value:g} {meant}\")" if meant else "")
+        raise ParameterError(info.name, f"must be within [{low:g}, {high:g}] {info.unit} in a "
+                                        f"sewing machine's mechanism, got {value:g}{hint}")
 
 
 def validate(params) -> None:

@@ -68,13 +68,13 @@ class PunchContactSlave(SewSlave):
     def _state_now(self) -> PunchState:
         # before initialization ends, the punch rests on its excitation (setup position)
         if self._state is None:
-            return self.model().initial_state(self._inputs["xi"], self._inputs["xi_dot"],
-                                              self._inputs["xi_ddot"])
+            u = self.held_inputs()
+            return self.model().initial_state(u["xi"], u["xi_dot"], u["xi_ddot"])
         return self._state
 
     def initialize(self, model):
-        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"],
-                                          self._inputs["xi_ddot"])
+        u = self.held_inputs()
+        self._state = model.initial_state(u["xi"], u["xi_dot"], u["xi_ddot"])
 
     def advance(self, model, t, h):
         # Taylor polynomial of the excitation about the start of this step
@@ -113,8 +113,8 @@ class PunchBodySlave(PunchContactSlave):
                     else p for p in outputs)
 
     def initialize(self, model):
-        self._state = model.initial_state(self._inputs["xi"], self._inputs["xi_dot"],
-                                          self._inputs["xi_ddot"], self._inputs["F2"])
+        u = self.held_inputs()
+        self._state = model.initial_state(u["xi"], u["xi_dot"], u["xi_ddot"], u["F2"])
 
     def advance(self, model, t, h):
         u = self.extrapolated_inputs(self._elapsed)

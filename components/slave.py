@@ -27,6 +27,9 @@ gives, the same for both:
     outputs read after inputs were set reflect those inputs (declared direct feedthrough);
     inside a step, inputs are extrapolated from the derivative inputs the FMU is given (Taylor),
   so that a plain Jacobi master of another tool gets the same physics;
+    a rate input (x_dot of x, x_ddot of x_dot) counts only while the host gives it: one that was
+  not set since its value input was acts as zero (a zero-order hold of the value), so a host
+  that connects only the values gets held inputs, never an extrapolation from a start value;
 - no module-level mutable state: everything lives on the instance; the standard library only.
 """
 from __future__ import annotations
@@ -51,6 +54,18 @@ class Port:
     kind: str = "Real"             # "Real" or "Boolean"
     source: str = ""               # linkage outputs: where in the model's motion the value is
                                    # ("E.x", "joints.M.vy"); default: the port's name
+    bound: float | None = -1.0     # inputs: the largest magnitude the mechanism can see; -1:
+                                   # SIGNAL_SCALE of the unit; None: unbounded (a cumulative angle)
+
+
+# The largest magnitude an input of each unit has in a running sewing-machine mechanism (an
+# order of magnitude above the hardest case of the catalogue): the declared min/max of an
+# input. A value beyond it is refused at doStep: it is a co-simulation that diverges (the punch
+# pressed metres into the fabric) or a value in another unit, never a figure to compute with.
+SIGNAL_SCALE: dict[str, float] = {
+    "m": 0.1, "m/s": 100.0, "m/s2": 1e6, "m/s3": 1e9, "N": 1e5, "N/s": 1e10,
+    "rad/s": 2000.0, "rad/s2": 1e7,
+}
 
 
 def shaft_inputs(omega: float) -> tuple[Port, Port, Port]:
@@ -87,6 +102,8 @@ class Variable:
     setter: Callable[[Any], None] | None = None
     start: Any = None              # parameters and inputs
     feedthrough: bool = False      # outputs: depends on the inputs at the same instant
+    min: float | None = None       # parameters and inputs: the declared range
+    max: float | None = None
 
 
 class SewSlave:
@@ -109,6 +126,13 @@ class SewSlave:
     # the layer's names of the calls, for log lines: kind -> (getter, setter)
     call_names: dict[str, tuple[str, str]] = {}
 
+    @classmethod
+    def whole_step_experiment(cls) -> tuple[float, float]:
+        """The DefaultExperiment (stop time, step size) in whole, even steps: the longest step
+        not above the declared one, so that a fixed-step host ends exactly at the stop time."""
+        stop, step = cls.experiment
+        return stop, stop / max(1, math.ceil(stop / step * (1.0 - 1e-12)))
+
     def __init__(self, **kwargs):
         super().__init__(**kwargs)     # the layer's pythonfmu base
         if "logger" in kwargs:         # instantiated by pythonfmu's binary, not by its builder
@@ -119,6 +143,10 @@ class SewSlave:
         self._param_info = parameter_info(cls.params_class) if cls.params_class else []
         self._params = {p.name: p.default for p in self._param_info}
         self._inputs = {p.name: float(p.start) for p in cls.inputs}
+        self._ranges = input_ranges(cls.inputs)
+        # rate inputs the host does not give: see held_inputs
+        self._set_since_step: set[str] = set()    # inputs set since the last step taken
+        self._held: set[str] = set()              # rates that act as zero
         self._elapsed = 0.0            # time since the inputs were last set (for extrapolation)
         self._time = 0.0
         self._initialized = False      # exitInitializationMode has run
@@ -147,11 +175,16 @@ class SewSlave:
         declared = [Variable(info.name, "Integer" if info.is_integer else "Real", "parameter",
                              f"{info.description} [{info.unit}]", info.unit,
                              self._param_getter(info.name), self._param_setter(info.name),
-                             start=info.default)
+                             start=info.default, min=info.bounds[0], max=info.bounds[1])
                     for info in self._param_info]
-        declared += [Variable(port.name, "Real", "input", f"{port.description} [{port.unit}]",
+        rate_of = {rate: value for chain in cls.taylor_inputs
+                   for value, rate in zip(chain, chain[1:])}
+        declared += [Variable(port.name, "Real", "input",
+                              f"{port.description} [{port.unit}]" + _held_note(port.name, rate_of),
                               port.unit, self._input_getter(port.name),
-                              self._input_setter(port.name), start=float(port.start))
+                              self._input_setter(port.name), start=float(port.start),
+                              min=None if _bound(port) is None else -_bound(port),
+                              max=_bound(port))
                      for port in cls.inputs]
         declared += [Variable(port.name, port.kind, "output",
                               f"{port.description} [{port.unit}]", port.unit,
@@ -191,6 +224,7 @@ class SewSlave:
     def _input_setter(self, name: str) -> Callable[[float], None]:
         def set_input(value):
             self._inputs[name] = value
+            self._set_since_step.add(name)
             self._elapsed = 0.0
             self._cache = None
         return set_input
@@ -246,10 +280,28 @@ class SewSlave:
             self._last_error = key
             self._error(message)
 
+    def held_inputs(self) -> dict[str, float]:
+        """The inputs as the model takes them at the instant they were set: a rate the host did
+        not set since it set the value it is the rate of acts as zero, and so do the rates of a
+        rate that does. A host that connects only the values (libcosim, ecos, a hand-written
+        loop) so gets a zero-order hold of them, and a value set once stays where it was set;
+        a host that gives the rates gets the Taylor extrapolation. A rate set again counts
+        again; where the host set nothing (the FMU run alone), the start values stand."""
+        fresh, held = self._set_since_step, self._held
+        for chain in type(self).taylor_inputs:
+            for value, rate in zip(chain, chain[1:]):
+                if rate in fresh:
+                    held.discard(rate)
+                elif value in fresh or value in held:
+                    held.add(rate)
+        if not held:
+            return dict(self._inputs)
+        return {name: (0.0 if name in held else x) for name, x in self._inputs.items()}
+
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
         """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs` chain
         (x, x', x'', ...) by its Taylor polynomial (the last derivative held), others held."""
-        u = dict(self._inputs)
+        u = self.held_inputs()
         for chain in type(self).taylor_inputs:
             values = [u[name] for name in chain]
             for k, name in enumerate(chain[:-1]):
@@ -265,6 +317,12 @@ class SewSlave:
         for name, value in self._inputs.items():
             if not (isinstance(value, float) and math.isfinite(value)):
                 return f"input {name} is {value} at t = {self._time:g} s"
+        for name, bound, unit in self._ranges:
+            value = self._inputs[name]
+            if not -bound <= value <= bound:
+                return (f"input {name} = {value:.6g} {unit} at t = {self._time:g} s is outside "
+                        f"its range [{-bound:g}, {bound:g}] {unit}: a co-simulation that "
+                        f"diverges, or a value in another unit")
         return None
 
     # --- getting and setting, for the layer's calls: none lets an exception reach pythonfmu ----
@@ -332,13 +390,16 @@ class SewSlave:
         # the usual case in one expression (this is the hot path); the reasons only when not
         if not (self._initialized and self._broken is None and 0.0 < h < math.inf
                 and abs(t - self._time) <= _TIME_TOLERANCE * max(1.0, abs(t), h)
-                and math.isfinite(sum(self._inputs.values()))):
+                and math.isfinite(sum(self._inputs.values()))
+                and all(-bound <= self._inputs[name] <= bound
+                        for name, bound, _ in self._ranges)):
             refusal = self._refusal(t, h)
             if refusal:
                 self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
                 return False
         saved = (self.save_internal(), self._elapsed, self._time)
         try:
+            self.held_inputs()            # which rates act as zero, from what was set
             self.advance(self.model(), t, h)
             self._time = t + h
             self._elapsed += h
@@ -356,6 +417,7 @@ class SewSlave:
             self._cache = None
             self._error(f"doStep({t:g}, {h:g}) discarded: {_describe(err)}")
             return False
+        self._set_since_step.clear()
         return True
 
     def _refusal(self, t: float, h: float) -> str | None:
@@ -377,13 +439,15 @@ class SewSlave:
         return {"params": dict(self._params), "inputs": dict(self._inputs),
                 "elapsed": self._elapsed, "time": self._time, "initialized": self._initialized,
                 "broken": self._broken, "internal": self.save_internal(),
-                "layer": self.save_layer()}
+                "layer": self.save_layer(),
+                "rates": [sorted(self._set_since_step), sorted(self._held)]}
 
     def _set_fmu_state(self, state: dict[str, Any]) -> None:
         try:
             if state["params"] != self._params:
                 self._model = None
             internal, layer = state["internal"], state["layer"]   # a foreign state fails here
+            fresh, held = state["rates"]
             self._params = dict(state["params"])
             self._inputs = dict(state["inputs"])
             self._elapsed = state["elapsed"]
@@ -392,6 +456,7 @@ class SewSlave:
             self._broken = state["broken"]
             self.restore_internal(internal)
             self.restore_layer(layer)
+            self._set_since_step, self._held = set(fresh), set(held)
             self._cache = None
         except Exception as err:          # noqa: BLE001 - a damaged or foreign state
             self._error(f"SetFMUState: not a state of this FMU ({_describe(err)}); the "
@@ -455,6 +520,24 @@ class LinkageSlave(SewSlave):
         u = self.extrapolated_inputs(self._elapsed)
         motion = self.model().motion(u["phi"], u["omega"], u["epsilon"])
         return {name: float(_pick(motion, path)) for name, path in type(self)._paths}
+
+
+def _bound(port: Port) -> float | None:
+    """The largest magnitude an input takes: its own, or its unit's SIGNAL_SCALE."""
+    return SIGNAL_SCALE.get(port.unit) if port.bound == -1.0 else port.bound
+
+
+def input_ranges(inputs: Sequence[Port]) -> tuple[tuple[str, float, str], ...]:
+    """(name, bound, unit) of every bounded input."""
+    return tuple((p.name, _bound(p), p.unit) for p in inputs if _bound(p) is not None)
+
+
+def _held_note(name: str, rate_of: dict[str, str]) -> str:
+    """What a rate input's description says of a host that does not set it."""
+    if name not in rate_of:
+        return ""
+    return (f"; acts as zero unless set each time {rate_of[name]} is (a host that sets only "
+            f"{rate_of[name]} gets it held between steps)")
 
 
 def _pick(value, path: tuple[str, ...]):

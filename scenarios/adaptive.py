@@ -67,7 +67,10 @@ class AdaptiveMaster(JacobiMaster):
 
     def step(self) -> None:
         t = self.t
-        h = min(self.h, self.stop - t)
+        # the end is met by the step or by two halves, never by a sliver after a full step
+        remaining = self.stop - t
+        h = self.h if self.h < 0.5 * remaining else \
+            remaining if self.h >= remaining else 0.5 * remaining
         self.states.save()
         inputs = [list(unit.in_buf) for unit in self.instances]
         switches = [list(unit.bool_buf) for unit in self.instances]
@@ -91,6 +94,8 @@ class AdaptiveMaster(JacobiMaster):
             else:
                 h = max(self.h_min, h * max(SHRINK, SAFETY * error ** (-1 / 3)))
         self.t = t + h if t + h < self.stop * (1 - 1e-12) else self.stop
+        if self.watch is not None:
+            self.watch.check(self.t)
         self.k += 1
         self.scale = np.maximum(self.scale, [abs(c.source.out_buf[c.output])
                                              for c in self.chains])

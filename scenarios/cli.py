@@ -309,11 +309,14 @@ def main(argv=None) -> int:
 
 def explain(err: Exception, command: str) -> str:
     """An error as one line that says what was wrong and where."""
+    from .analyses import RoleError, RunTooShort
+    from .divergence import Diverged
     from .hosts import HostError
     from .master import CosimError
     from .outputs import OutputError
 
-    if isinstance(err, (ScenarioError, CosimError, HostError, OutputError)):
+    if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,
+                        RoleError, Diverged)):
         return " ".join(str(err).split())
     if isinstance(err, OSError) and err.strerror:
         where = f"{err.filename}: " if err.filename else ""

@@ -52,6 +52,10 @@ ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (s
 # exchanged values; the adaptive master's local extrapolation error of the exchanged signals,
 # relative to their amplitude (scenarios/adaptive.py)
 DEFAULT_TOLERANCE = {"iterative": 1e-6, "adaptive": 1e-5}
+# the tolerances each master honours: above, its errors exceed the figures' own accuracy (the
+# adaptive master at 1e-1 is 1.2° off the contact onset); below, the adaptive master's steps
+# reach their floor (step/1000) and the iterative master's passes the rounding of the values
+TOLERANCE_RANGE = {"iterative": (1e-12, 1e-2), "adaptive": (1e-8, 1e-2)}
 
 
 class ScenarioError(ValueError):
@@ -106,6 +110,11 @@ class Scenario:
         """experiment.tolerance, or the master's default (a scenario file's tolerance belongs to
         the file's master: run with another master, that master's default applies)."""
         if self.tolerance and self.tolerance_master in (None, self.master):
+            low, high = TOLERANCE_RANGE.get(self.master, (0.0, math.inf))
+            if not low <= self.tolerance <= high:
+                raise ScenarioError(f"{self.source}: experiment.tolerance = {self.tolerance:g}: "
+                                    f"the {self.master} master honours tolerances from "
+                                    f"{low:g} to {high:g}")
             return self.tolerance
         return DEFAULT_TOLERANCE.get(self.master, 1e-6)
 
@@ -142,6 +151,15 @@ class Scenario:
         except ParameterError as err:
             raise ScenarioError(f"{self.source}: {self.shaft}: {err}") from None
         return MainShaft(params).time_of_angle(2 * math.pi * self.revolutions)
+
+    def even_steps(self) -> tuple[int, float]:
+        """The run as whole, even communication steps: (n, h) with n·h the end time and h the
+        longest step not above experiment.step. No step is a sliver, and a fixed-step host that
+        takes n steps of h ends where the scenario does (on a whole revolution where it counts
+        revolutions)."""
+        end = self.end_time()
+        n = max(1, math.ceil(end / self.step * (1.0 - 1e-12)))
+        return n, end / n
 
     def default_shaft(self) -> str | None:
         """The MainShaft whose revolutions count when experiment.shaft names none: the

@@ -167,9 +167,9 @@ def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout:
     work.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     proc = subprocess.run([str(ecos_binary()), "simulate", "--path", str(Path(ssp).resolve()),
-                           "--stepSize", repr(scenario.step),
+                           "--stepSize", repr(scenario.even_steps()[1]),
                            # one step beyond: the caller cuts the record at the stop time exactly
-                           "--stopTime", repr(scenario.end_time() + scenario.step),
+                           "--stopTime", repr(scenario.end_time() + scenario.even_steps()[1]),
                            "--parameterSet", PARAMETER_SET, "--noParallel", "-l", "warn"],
                           cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
@@ -227,7 +227,8 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
     error_file.unlink(missing_ok=True)
     started = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "scenarios.hosts", host, str(ssp),
-                           repr(scenario.step), repr(scenario.end_time()), json.dumps(record),
+                           repr(scenario.even_steps()[1]), repr(scenario.end_time()),
+                           json.dumps(record),
                            str(out_csv)], capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
     if error_file.exists():

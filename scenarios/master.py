@@ -52,6 +52,7 @@ from fmpy.fmi2 import (
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
 from . import interrupt
+from .divergence import DivergenceWatch
 from .format import Scenario, ScenarioError
 
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -493,7 +494,8 @@ class Master:
         if sc.step > self.stop:
             raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
                                 f"run ({self.stop:g} s)")
-        self.n_steps = max(1, math.ceil(self.stop / sc.step - 1e-9))
+        self.n_steps, self.h = sc.even_steps()
+        sc.master_settings()         # a tolerance the master cannot honour: refused here
         self.every = max(1, int(sc.record_every))
         self.log = LogCollector()
         self.instances: list[FmuInstance] = []
@@ -505,6 +507,7 @@ class Master:
             self._phase = "initialization"
             for unit in self.instances:
                 self._initialize(unit, self.stop)
+        self.watch = DivergenceWatch(self.in_loops, self.h) if self.in_loops else None
         self._rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
         self._data = np.empty((self._rows, len(self.columns)))
         self._times = np.empty(self._rows)
@@ -513,26 +516,28 @@ class Master:
         self._phase = "step"
 
     def step(self) -> None:
-        """One communication step (the last one ends exactly at the stop time)."""
-        t = self.k * self.scenario.step
-        h = min(self.scenario.step, self.stop - t)
+        """One communication step: n_steps even steps of h end exactly at the stop time."""
+        h = self.h
+        t = self.k * h
         try:                       # (no context manager here: this is the hot path)
             self.exchange_and_step(self.instances, t, h)
         except FMICallException as err:
             raise self._failure(err, f"from t = {t:g} to {t + h:g} s") from None
+        if self.watch is not None:
+            self.watch.check(t + h)
         self.k += 1
         if self.k % self.every == 0 or self.k == self.n_steps:
-            self._record_row(min(self.k * self.scenario.step, self.stop))
+            self._record_row(self.stop if self.k == self.n_steps else self.k * h)
 
     def save_state(self) -> tuple:
         """The state of every FMU and of the master: `restore_state` rolls back to it."""
-        with self._reporting(self.k * self.scenario.step):
+        with self._reporting(self.k * self.h):
             return (self.k, self._row, [u.get_state() for u in self.instances],
                     [list(u.in_buf) for u in self.instances])
 
     def restore_state(self, state: tuple) -> None:
         self.k, self._row, fmu_states, inputs = state
-        with self._reporting(self.k * self.scenario.step):
+        with self._reporting(self.k * self.h):
             for unit, fmu_state, values in zip(self.instances, fmu_states, inputs):
                 unit.set_state(fmu_state)
                 unit.in_buf[:] = values            # the inputs the master last set, as then

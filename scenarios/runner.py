@@ -113,7 +113,7 @@ def summarize(result: RunResult) -> dict:
         figures = analyses.module(sc.analysis).summary_of_run(result)
     # what the master did: the iterative master's passes, the adaptive master's steps
     master = {f"master_{k}": v for k, v in result.coupling.items()}
-    return {"scenario": sc.name, "master": sc.master, "step": sc.step,
+    return {"scenario": sc.name, "master": sc.master, "step": sc.even_steps()[1],
             "stop_time": float(result.time[-1]), "wall_time_s": round(result.wall_time, 4),
             **master, **figures}
 

@@ -76,8 +76,27 @@ def parameters(result, role: str) -> dict:
     return result.scenario.instances[result.scenario.roles[role]].parameters
 
 
+class RunTooShort(ValueError):
+    """A run that does not hold one whole revolution of the shaft to read figures from."""
+
+
+def whole_revolution(phi_end: float) -> tuple[float, float]:
+    """The crank angles (start, end) of the last whole revolution up to phi_end: from one
+    setup position (φ a multiple of 2π, where every run starts) to the next. A run that ends
+    between two (a stop time that is not a whole number of turns) is read up to the last one
+    it passed, so that angles within the revolution mean what they mean in the paper."""
+    turns = math.floor(phi_end / (2 * math.pi) + 1e-9)
+    if turns < 1:
+        raise RunTooShort(f"the run turns the shaft {phi_end / (2 * math.pi):.4g} revolutions: "
+                          f"its key figures are read from the last whole revolution; run at "
+                          f"least one (experiment.revolutions = 1 or a longer stop_time)")
+    end = 2 * math.pi * turns
+    return end - 2 * math.pi, end
+
+
 def last_revolution(result):
-    """Mask of the samples in the shaft's last revolution (one stitch): the window every
+    """Mask of the samples in the shaft's last whole revolution (one stitch): the window every
     analysis reads its key figures from."""
     phi = column(result, "shaft", "phi")
-    return phi >= phi[-1] - 2 * math.pi - 1e-12
+    start, end = whole_revolution(float(phi[-1]))
+    return (phi >= start - 1e-9) & (phi <= end + 1e-9)

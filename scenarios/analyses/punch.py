@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from . import column, last_revolution
+from . import column, last_revolution, whole_revolution
 
 FIGURES = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "n_contacts",
            "F2_peak", "F2_weld_mean")
@@ -33,15 +33,15 @@ def summary(phi: np.ndarray, y: np.ndarray, F2: np.ndarray, contact: np.ndarray,
             F2_max: np.ndarray | None = None) -> dict:
     """The punch's key figures over the last shaft revolution of the samples. F2_max, where
     given, is the largest F2 within each sample interval (the FMU's peak hold)."""
-    phi_end = phi[-1]
-    start = phi_end - 2 * math.pi
+    start, end = whole_revolution(float(phi[-1]))
     k0 = max(int(np.searchsorted(phi, start)) - 1, 0)      # one sample before, for the edges
-    ang = np.degrees(phi[k0:] - start)
-    y, F2 = y[k0:], F2[k0:]
-    peaks = F2 if F2_max is None else np.maximum(F2, F2_max[k0:])
+    k1 = int(np.searchsorted(phi, end + 1e-9, side="right"))
+    ang = np.degrees(phi[k0:k1] - start)
+    y, F2 = y[k0:k1], F2[k0:k1]
+    peaks = F2 if F2_max is None else np.maximum(F2, F2_max[k0:k1])
     # a sample's peak hold covers the interval before it: count those ending inside the revolution
     F2_peak = float(peaks[ang > 0].max(initial=0.0))
-    on = np.asarray(contact[k0:], dtype=bool) & (F2 > 0)
+    on = np.asarray(contact[k0:k1], dtype=bool) & (F2 > 0)
     intervals = []
     k, n = 0, len(ang)
     while k < n:
@@ -128,7 +128,7 @@ def plot(curves, path, title: str) -> None:
     for label, result in curves:
         mask = last_revolution(result)
         phi = column(result, "shaft", "phi")
-        deg = np.degrees(phi[mask] - (phi[-1] - 2 * math.pi))
+        deg = np.degrees(phi[mask] - whole_revolution(float(phi[-1]))[0])
         ax_y.plot(deg, signal(result, "y")[mask] * 1e3, label=label)
         ax_f.plot(deg, signal(result, "F2")[mask], label=label)
     ax_y.plot(deg, column(result, "linkage", "xi")[mask] * 1e3, "k:", lw=1, label="ξ (slider)")

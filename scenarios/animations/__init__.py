@@ -52,13 +52,13 @@ class Animation:
 
 def frame_samples(phi: np.ndarray, frames: int = FRAMES) -> list[int]:
     """The recorded samples nearest to `frames` equally spaced angles of the last revolution."""
-    end = phi[-1]
-    targets = end - 2 * math.pi + 2 * math.pi * np.arange(frames) / frames
+    start, _ = analyses.whole_revolution(float(phi[-1]))
+    targets = start + 2 * math.pi * np.arange(frames) / frames
     idx = np.clip(np.searchsorted(phi, targets), 1, len(phi) - 1)
     nearer_left = (targets - phi[idx - 1]) < (phi[idx] - targets)
     # within the revolution: with non-uniform samples (the adaptive master) the nearest sample to
     # its first angle may lie before it
-    inside = phi[idx - 1] >= end - 2 * math.pi - 1e-12
+    inside = phi[idx - 1] >= start - 1e-12
     return [int(i) for i in np.where(nearer_left & inside, idx - 1, idx)]
 
 
@@ -124,5 +124,5 @@ def reach(joints_at, samples, margin: float) -> tuple[tuple[float, float], tuple
 def angle_label(result, i: int) -> str:
     """Crank angle within the last revolution and the time of sample i."""
     phi = analyses.column(result, "shaft", "phi")
-    within = math.degrees(phi[i] - (phi[-1] - 2 * math.pi)) % 360.0
+    within = math.degrees(phi[i] - analyses.whole_revolution(float(phi[-1]))[0]) % 360.0
     return f"φ = {within:5.1f}°   t = {result.time[i]:.4f} s"
