@@ -79,7 +79,8 @@ def cmd_run(args) -> None:
                   f"a looser experiment.tolerance helps)", file=sys.stderr)
     for label, fig in figures.items():
         shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in fig.items()
-                          if k not in ("scenario", "master", "step", "stop_time", "provenance"))
+                          if k not in ("scenario", "master", "step", "stop_time", "provenance",
+                                       "units"))
         print(f"  {label + ': ' if label else ''}{shown}")
 
 
@@ -121,8 +122,7 @@ def cmd_sweep(args) -> None:
     swept = [name for name, _ in points[0].values]
     picture = out / f"{scenario.name}_sweep.png"
     if (args.plot or args.report) and scenario.analysis:
-        figures = [f for f in getattr(analyses.module(scenario.analysis), "FIGURES", ())
-                   if f != "n_contacts"]
+        figures = [f for f in analyses.module(scenario.analysis).FIGURES if f != "n_contacts"]
         plot_table(rows, swept, figures, picture, scenario.description)
     if args.report:
         from .report import sweep_report
@@ -285,6 +285,10 @@ def main(argv=None) -> int:
             stream.reconfigure(errors="backslashreplace")
     args = parser.parse_args(argv)
     interrupt_on_sigterm()
+    import warnings
+    # a warning (an SSP input that nothing sets) is one line, as errors are
+    warnings.showwarning = lambda message, *_, **__: print(f"sewfmu: warning: {message}",
+                                                           file=sys.stderr)
     try:
         args.func(args)
         sys.stdout.flush()
@@ -318,6 +322,12 @@ def explain(err: Exception, command: str) -> str:
     if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,
                         RoleError, Diverged)):
         return " ".join(str(err).split())
+    if isinstance(err, ModuleNotFoundError) and err.name:
+        extra = EXTRAS.get(err.name.split(".")[0])
+        if extra:
+            return (f"`sewfmu {command}` needs the optional package {err.name.split('.')[0]}: "
+                    f"pip install \"sewfmu[{extra}]\" (in a checkout: pip install -e "
+                    f"\".[{extra}]\")")
     if isinstance(err, OSError) and err.strerror:
         where = f"{err.filename}: " if err.filename else ""
         return f"{where}{err.strerror}"
@@ -326,6 +336,11 @@ def explain(err: Exception, command: str) -> str:
                f"or a shorter run needs less)"
     return (f"unexpected {type(err).__name__} during `sewfmu {command}`: {err} "
             f"(a bug in sewfmu: please report it; --debug shows where)")
+
+
+# the optional packages and the extra of pyproject.toml that installs each
+EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
+          "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop"}
 
 
 def _positive_number(text: str) -> float:

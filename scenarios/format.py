@@ -44,7 +44,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from components.catalogue import FMI_VERSIONS, FMUS
+from components.catalogue import FMI_VERSIONS, FMUS, parameter_units
 
 MASTERS = ("jacobi", "gauss-seidel", "iterative", "adaptive")
 ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
@@ -178,6 +178,8 @@ class Scenario:
         if inst not in self.instances:
             raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source} "
                                 f"(instances: {', '.join(self.instances)})")
+        if isinstance(value, str):          # a value with its unit: "110 deg", "955 rpm"
+            value = self._in_declared_unit(inst, key, value, f"{origin} {target}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ScenarioError(f"{origin} {target}: value must be a number, got {value!r}")
         try:
@@ -189,6 +191,21 @@ class Scenario:
                                 f"within the range of a float (about ±1.8e308), got "
                                 f"{_short(value)}")
         self.instances[inst].parameters[key] = value
+
+    def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
+        """A value given with its unit, in the unit its FMU declares for the variable."""
+        from components.units import UnitError, in_unit
+
+        fmu = self.instances[inst].fmu
+        units = (_declared_units(self.fmu_files[fmu]) if fmu in self.fmu_files
+                 else parameter_units(fmu))
+        if key not in units:
+            raise ScenarioError(f"{where}: {inst} ({fmu}) has no parameter {key!r}"
+                                f"{did_you_mean(key, units)}")
+        try:
+            return in_unit(text, units[key])
+        except UnitError as err:
+            raise ScenarioError(f"{where}: {err}") from None
 
     def _set_experiment(self, key: str, value: Any, origin: str) -> None:
         choices = {"master": MASTERS, "acceleration": ACCELERATIONS}
@@ -218,12 +235,35 @@ class Scenario:
             raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
                                 f"(step, stop_time, revolutions, master, record_every, "
                                 f"tolerance, acceleration, fmi)")
+        if isinstance(value, str) and key in ("step", "stop_time"):     # "0.25 ms", "2 s"
+            from components.units import UnitError, in_unit
+            try:
+                value = in_unit(value, "s")
+            except UnitError as err:
+                raise ScenarioError(f"{origin} experiment.{key}: {err}") from None
         number = _positive(value, f"{origin} experiment.{key}")
         setattr(self, key, number)
         if key == "stop_time":
             self.revolutions = None
         elif key == "revolutions":
             self.stop_time = None
+
+
+def _declared_units(fmu_file: Path) -> dict[str, str]:
+    """name -> unit of the parameters and inputs of an FMU file (from another tool)."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu_file))
+    return {v.name: v.unit or "" for v in md.modelVariables
+            if v.causality in ("parameter", "input")}
+
+
+def did_you_mean(name: str, known) -> str:
+    """ "; did you mean 'x'?" for the closest known name, or nothing."""
+    import difflib
+
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def label_of(target: str, value: Any) -> str:

@@ -53,7 +53,7 @@ from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
 from . import interrupt
 from .divergence import DivergenceWatch
-from .format import Scenario, ScenarioError
+from .format import Scenario, ScenarioError, did_you_mean
 
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 _FATAL = 4
@@ -130,14 +130,68 @@ def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
         variables = {v.name: v for v in md.modelVariables}
         for key, value in inst.parameters.items():
             v = variables.get(key)
-            if v is None or v.causality != "parameter":
+            # an input may be given a value too: it then holds it (unconnected)
+            if v is None or v.causality not in ("parameter", "input"):
                 names = sorted(n for n, x in variables.items() if x.causality == "parameter")
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: {inst.name} "
-                                    f"({md.modelName}) has no parameter {key!r} "
-                                    f"(has: {', '.join(names)})")
+                                    f"({md.modelName}) has no parameter {key!r}"
+                                    f"{did_you_mean(key, names)} (has: {', '.join(names)})")
             if kind_of(v) == "Integer" and value != int(value):
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: must be an integer, "
                                     f"got {value!r}")
+            low, high = _number_or_none(v.min), _number_or_none(v.max)
+            if (low is not None and value < low) or (high is not None and value > high):
+                raise ScenarioError(f"{scenario.source}: {inst.name}.{key} = {value:g} "
+                                    f"{v.unit or ''}: outside the range [{_g(low, '-inf')}, "
+                                    f"{_g(high, 'inf')}] {inst.name} ({md.modelName}) declares"
+                                    f"{_unit_hint(v.unit, value)}")
+
+
+def _number_or_none(text) -> float | None:
+    try:
+        return None if text is None else float(text)
+    except ValueError:
+        return None
+
+
+def _g(value, unbounded: str) -> str:
+    return unbounded if value is None else f"{value:g}"
+
+
+def _unit_hint(unit: str | None, value: float) -> str:
+    """How a value out of range may have been meant: with the unit users think in."""
+    from components.units import DISPLAY_UNITS
+
+    displays = list(DISPLAY_UNITS.get(unit or "", {}))
+    return (f" (meant in {displays[0]}? give the unit: \"{value:g} {displays[0]}\")"
+            if displays else "")
+
+
+def check_inputs_given(scenario: Scenario, units: list) -> None:
+    """Every input of every instance is connected or given a value in the scenario: an input left
+    at its start value runs the FMU on a number nobody chose. A system read from SSP (where the
+    standard lets an input keep its start value) gets a warning instead."""
+    import warnings
+
+    for unit in units:
+        connected = {name for name, _, _ in unit.inputs}
+        given = scenario.instances[unit.name].parameters
+        for v in unit.md.modelVariables:
+            if v.causality != "input" or v.name in connected or v.name in given:
+                continue
+            text = (f"{scenario.source}: input {unit.name}.{v.name} is neither connected nor "
+                    f"given a value")
+            if scenario.fmu_files:
+                warnings.warn(f"{text}: it keeps its start value {v.start}", InputLeftOpen,
+                              stacklevel=2)
+                continue
+            raise ScenarioError(f"{text}: connect it (\"<instance>.<output> -> "
+                                f"{unit.name}.{v.name}\") or give it a value in "
+                                f"[instances.{unit.name}] parameters")
+
+
+class InputLeftOpen(UserWarning):
+    """An input of an SSP system that nothing sets: it keeps its start value."""
 
 
 def _reason(lines: list[str], err: Exception) -> str:
@@ -599,6 +653,7 @@ class Master:
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))
         check_parameters(sc, self.fmu_paths)
+        check_inputs_given(sc, list(by_name.values()))
         order, loops = _dependency_order(list(by_name.values()))
         self.in_loops = [u for u in order if u in loops]
         # inputs and outputs settle in one pass along a chain; around a feedback loop each pass

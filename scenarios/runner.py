@@ -108,14 +108,17 @@ def simulate(scenario: Scenario, fmu_dir: Path | None = None) -> RunResult:
 
 def summarize(result: RunResult) -> dict:
     sc = result.scenario
-    figures = {}
+    figures, units = {}, {}
     if sc.analysis:
-        figures = analyses.module(sc.analysis).summary_of_run(result)
+        module = analyses.module(sc.analysis)
+        figures = module.summary_of_run(result)
+        units = {key: module.FIGURES[key] for key in figures if key in module.FIGURES}
     # what the master did: the iterative master's passes, the adaptive master's steps
     master = {f"master_{k}": v for k, v in result.coupling.items()}
+    units = {"step": "s", "stop_time": "s", "wall_time_s": "s", **units}
     return {"scenario": sc.name, "master": sc.master, "step": sc.even_steps()[1],
             "stop_time": float(result.time[-1]), "wall_time_s": round(result.wall_time, 4),
-            **master, **figures}
+            **master, **figures, "units": units}
 
 
 def write_csv(result: RunResult, path: Path) -> None:
@@ -322,7 +325,7 @@ def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | Non
         write_json(theirs, staging / "summary.json")
     rows = []
     for key, value in mine.items():
-        if key in ("scenario", "master", "step", "stop_time"):
+        if key in ("scenario", "master", "step", "stop_time") or isinstance(value, dict):
             continue
         b = theirs.get(key)
         diff = value - b if isinstance(value, (int, float)) and isinstance(b, (int, float)) \

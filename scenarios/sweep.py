@@ -124,7 +124,7 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
             write_csv(result, Path(results_dir) / point.label / "results.csv")
     except Exception as err:                     # recorded, and the sweep goes on
         return failed_row(row, err)
-    figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step")}
+    figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step", "units")}
     return {**row, "status": "ok", **figures}
 
 

@@ -21,6 +21,10 @@ from components.parameters import with_values
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 
+# the key figures of a run and their units (summary.json, sweeps, reports)
+FIGURES = {"omega1": "rad/s", "omega2": "rad/s", "stitch_rate_per_min": "1/min",
+           "peak_abs_U2_last_stitch_um": "um", "peak_abs_U2_um": "um"}
+
 RATES = np.arange(600.0, 2000.0 + 1e-9, 20.0)          # stitches/min
 MACHINE_RATE = 1600.0
 STEPS_PER_STITCH = 360

@@ -20,6 +20,12 @@ from components.parameters import with_values
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 
+# the key figures of a run and their units (summary.json, sweeps, reports)
+FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "deg",
+           "M_path_width_mm": "mm", "M_path_height_mm": "mm",
+           "min_transmission_angle_C_deg": "deg", "min_transmission_angle_N_deg": "deg",
+           "min_transmission_angle_F_deg": "deg"}
+
 L5_L4_RATIOS = (3.5, 4.5, 5.5, 6.0, 6.5, 7.0)
 ROD_RATIOS = tuple(np.round(np.arange(0.7, 1.7001, 0.05), 2))
 _PHI1 = np.radians(np.arange(0.0, 360.0, 0.5))

@@ -18,8 +18,9 @@ import numpy as np
 
 from . import column, last_revolution, whole_revolution
 
-FIGURES = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "n_contacts",
-           "F2_peak", "F2_weld_mean")
+# the key figures of a run and their units (summary.json, sweeps, reports)
+FIGURES = {"contact_onset_deg": "deg", "contact_loss_deg": "deg", "contact_duration_deg": "deg",
+           "n_contacts": "1", "F2_peak": "N", "F2_weld_mean": "N"}
 
 
 def _zero_between(a0, f0, a1, f1, lo, hi):

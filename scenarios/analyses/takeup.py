@@ -18,6 +18,12 @@ from components.takeup import TakeupLinkage, TakeupParams
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 
+# the key figures of a run and their units (summary.json, sweeps, reports)
+FIGURES = {"path_extent_z_mm": "mm", "path_extent_x_mm": "mm", "stroke_mm": "mm",
+           "peak_speed_m_s": "m/s", "peak_acceleration_m_s2": "m/s2",
+           "central_difference_step_deg": "deg", "central_difference_max_error_m_s": "m/s",
+           "central_difference_max_error_percent_of_peak_speed": "%"}
+
 LINKS = ("L_AB", "L_BC", "L_CD", "L_BE")
 
 
