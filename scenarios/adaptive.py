@@ -136,4 +136,4 @@ class AdaptiveMaster(JacobiMaster):
                          {c: np.array([row[j] for row in self.rows])
                           for j, c in enumerate(self.columns)},
                          0.0, self.log.lines,
-                         {"steps": self.k, "rejected_steps": self.rejected})
+                         {"steps": self.k, "rejected_steps": self.rejected}, self.units)

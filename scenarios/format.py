@@ -38,6 +38,7 @@ import codecs
 import copy
 import hashlib
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -249,6 +250,18 @@ class Scenario:
             self.stop_time = None
 
 
+_INSTANCE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
+
+
+def check_instance_name(name: str) -> None:
+    """An instance name becomes part of column names (instance.variable) and of folder names
+    (`instance.parameter=value`): a letter or '_' first, then letters, digits, '_' or '-', at
+    most 64 characters, and not 'experiment'. Raises ValueError saying so."""
+    if not isinstance(name, str) or not _INSTANCE_NAME.match(name) or name == "experiment":
+        raise ValueError(f"an instance name starts with a letter or '_' and holds only letters, "
+                         f"digits, '_' and '-' (at most 64; not 'experiment'), got {name!r}")
+
+
 def _declared_units(fmu_file: Path) -> dict[str, str]:
     """name -> unit of the parameters and inputs of an FMU file (from another tool)."""
     from fmpy import read_model_description
@@ -399,10 +412,10 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     instances = {}
     for inst_name, spec in _table(data, "instances", source).items():
         where = f"{source}: instances.{inst_name}"
-        if not inst_name.strip() or "." in inst_name or "->" in inst_name \
-                or inst_name != inst_name.strip() or inst_name == "experiment":
-            raise ScenarioError(f"{where}: an instance name must be non-empty, without '.', "
-                                f"'->' or surrounding spaces, and not 'experiment'")
+        try:
+            check_instance_name(inst_name)
+        except ValueError as err:
+            raise ScenarioError(f"{where}: {err}") from None
         if not isinstance(spec, dict) or not isinstance(spec.get("fmu"), str):
             raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
         for key in spec:

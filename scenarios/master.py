@@ -71,6 +71,7 @@ class RunResult:
     wall_time: float
     log: list[str] = field(default_factory=list)
     coupling: dict = field(default_factory=dict)     # what the iterative or adaptive master did
+    units: dict[str, str] = field(default_factory=dict)   # column -> its declared unit
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
@@ -602,7 +603,7 @@ class Master:
         rows = slice(0, self._row)
         return RunResult(self.scenario, self._times[rows].copy(),
                          {c: self._data[rows, j].copy() for j, c in enumerate(self.columns)},
-                         0.0, self.log.lines)
+                         0.0, self.log.lines, units=self.units)
 
     def close(self) -> None:
         self._free(getattr(self, "instances", []))
@@ -671,12 +672,14 @@ class Master:
         else:
             wanted = list(sc.record)
         self._record_plan = []
+        self.units: dict[str, str] = {}
         for col in wanted:
             inst, dot, var = str(col).partition(".")
             if inst not in by_name or not dot:
                 raise ScenarioError(f"{sc.source}: record {col!r}: unknown instance")
             kind, idx = by_name[inst].want_output(var, f"{sc.source}: record {col!r}")
             self._record_plan.append((by_name[inst], kind, idx))
+            self.units[col] = by_name[inst].variables[var].unit or ""
         for unit in units:
             unit.prepare()
         return wanted

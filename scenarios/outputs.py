@@ -64,7 +64,7 @@ def write_atomic(path: Path, write, binary: bool = False) -> None:
         raise
 
 
-def _alive(pid: int) -> bool:
+def alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -83,7 +83,7 @@ def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
     entries = folder.rglob(".*") if recursive else folder.glob(".*")
     for entry in list(entries):
         match = _DEBRIS.match(entry.name)
-        if not match or int(match.group(1)) == os.getpid() or _alive(int(match.group(1))):
+        if not match or int(match.group(1)) == os.getpid() or alive(int(match.group(1))):
             continue
         if entry.is_dir() and not entry.is_symlink():
             shutil.rmtree(entry, ignore_errors=True)
@@ -143,3 +143,13 @@ def replacing(folder: Path):
         os.rename(staging / name, folder / name)
     write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n" for n in new)))
     shutil.rmtree(staging, ignore_errors=True)
+
+
+def folder_for(base: Path, label: str) -> Path:
+    """The folder of one variant or sweep point (`instance.parameter=value`) inside base: path
+    separators and a leading dot are replaced, and the result is checked to lie inside base."""
+    name = re.sub(r"[/\\\x00]", "_", label).lstrip(".") or "_"
+    folder = Path(base) / name
+    if Path(base).resolve() not in folder.resolve().parents:
+        raise OutputError(f"{label!r} cannot be a folder inside {base}")
+    return folder

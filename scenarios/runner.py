@@ -18,7 +18,7 @@ from components.build import default_fmu_dir, ensure_built
 from . import analyses
 from .format import Scenario, ScenarioError, label_of
 from .master import RunResult, run
-from .outputs import replacing, write_atomic
+from .outputs import folder_for, replacing, write_atomic
 
 
 # the analyses whose scenarios the monolithic solution (scenarios/punch_monolithic.py) solves
@@ -124,7 +124,9 @@ def summarize(result: RunResult) -> dict:
 def write_csv(result: RunResult, path: Path) -> None:
     names = list(result.columns)
     table = np.column_stack([result.time] + [result.columns[n] for n in names])
-    header = ",".join(["time"] + names)
+    # each column says its unit, as "name [unit]" (a Boolean, which has none, its name alone)
+    header = ",".join(["time [s]"] + [f"{n} [{result.units[n]}]" if result.units.get(n) else n
+                                      for n in names])
     write_atomic(path, lambda f: np.savetxt(f, table, delimiter=",", header=header, comments="",
                                              fmt="%.17g"))
 
@@ -209,7 +211,7 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
     with replacing(out_dir) as staging:
         pictures = []
         for label, result, own in runs:
-            where = staging / label if label else staging
+            where = folder_for(staging, label) if label else staging
             write_csv(result, where / "results.csv")
             write_json(own, where / "summary.json")
             if (animate or report) and animations.can_animate(scenario):
@@ -318,7 +320,7 @@ def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | Non
         time, columns, wall = run_in_host(host, ssp, scenario, list(own.columns),
                                           staging / "results.csv")
         time, columns = _end_at(time, columns, scenario.end_time())
-        other = RunResult(scenario, time, columns, wall)
+        other = RunResult(scenario, time, columns, wall, units=own.units)
         write_csv(other, staging / "results.csv")
         mine, theirs = summarize(own), summarize(other)
         theirs["host"] = host

@@ -17,13 +17,17 @@ from __future__ import annotations
 
 import atexit
 import hashlib
+import os
 import shutil
+import stat
 import tempfile
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from .format import Connection, Instance, Scenario, ScenarioError, check_one_source
+from .format import (Connection, Instance, Scenario, ScenarioError, check_instance_name,
+                     check_one_source)
+from .outputs import alive
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -40,10 +44,13 @@ def load_ssp(path: Path) -> Scenario:
     """The system of an .ssp or .ssd file as a scenario (its FMUs in scenario.fmu_files)."""
     path = Path(path)
     if not path.is_file():
-        raise ScenarioError(f"SSP file {path} does not exist")
-    raw = path.read_bytes()
+        raise ScenarioError(f"SSP file {path} does not exist or is not a regular file")
+    if path.stat().st_size > MAX_ARCHIVE_BYTES:
+        raise ScenarioError(f"{path}: {path.stat().st_size / 2**20:.0f} MiB is more than an SSP "
+                            f"system of FMUs needs (at most {MAX_ARCHIVE_BYTES / 2**20:.0f} MiB)")
+    digest = _digest(path)
     if path.suffix.lower() == ".ssp":
-        base = _unpacked(path, raw)
+        base = _unpacked(path, digest)
         ssd = base / SSD_NAME
         if not ssd.is_file():
             raise ScenarioError(f"{path}: no {SSD_NAME} at the archive's root")
@@ -62,11 +69,12 @@ def load_ssp(path: Path) -> Scenario:
             raise ScenarioError(f"{where}: a component without name or source")
         if name in instances:
             raise ScenarioError(f"{where}: component {name!r} appears twice")
-        if "." in name:
-            raise ScenarioError(f"{where}: component {name!r}: a name with '.' cannot be "
-                                f"addressed as component.variable")
-        fmu = (base / source).resolve()
-        if not str(fmu).startswith(str(base.resolve())) or not fmu.is_file():
+        try:
+            check_instance_name(name)
+        except ValueError as err:
+            raise ScenarioError(f"{where}: component {name!r}: {err}") from None
+        fmu = _inside(base, source)
+        if fmu is None:
             raise ScenarioError(f"{where}: component {name}: its FMU {source} is not in the "
                                 f"{'archive' if path.suffix.lower() == '.ssp' else 'folder'}")
         kind = _fmu_type(fmu, files, where, name)
@@ -86,37 +94,107 @@ def load_ssp(path: Path) -> Scenario:
         roles=roles, tolerance=experiment["tolerance"], acceleration=experiment["acceleration"],
         tolerance_master=experiment["master"])
     scenario.fmu_files = files
-    scenario.digest = hashlib.sha256(raw).hexdigest()
+    scenario.digest = digest
     check_one_source(connections, where)
     return scenario
 
 
-# --- reading ---------------------------------------------------------------------------------
+# --- reading: nothing outside the archive, nothing unbounded --------------------------------
+# An .ssp may come from anyone: its members and references are confined to it, only regular
+# files are read, and what it may unpack to is bounded (a 5 MB zip can hold gigabytes).
+MAX_ARCHIVE_BYTES = 1 << 30          # the .ssp itself
+MAX_UNPACKED_BYTES = 2 << 30         # everything it unpacks to
+MAX_MEMBERS = 10_000
+MAX_XML_BYTES = 64 << 20             # an .ssd or .ssv
 _UNPACKED: dict[str, Path] = {}
+_TEMP_PREFIX = "sewfmu-ssp-"
 
 
-def _unpacked(path: Path, raw: bytes) -> Path:
+def _digest(path: Path) -> str:
+    """sha256 of a file, read in chunks (never whole into memory)."""
+    sha = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            sha.update(chunk)
+    return sha.hexdigest()
+
+
+def _inside(base: Path, reference: str) -> Path | None:
+    """The regular file `reference` names inside `base`, or None if it names anything else
+    (a path outside, a device, a FIFO, a folder, nothing)."""
+    target = (base / reference).resolve()
+    root = base.resolve()
+    if target != root and root not in target.parents:
+        return None
+    try:
+        return target if stat.S_ISREG(target.stat().st_mode) else None
+    except OSError:
+        return None
+
+
+def _unpacked(path: Path, key: str) -> Path:
     """The archive unpacked once per process (the FMUs stay there for the run's workers)."""
-    key = hashlib.sha256(raw).hexdigest()
     if key not in _UNPACKED:
-        folder = Path(tempfile.mkdtemp(prefix="sewfmu-ssp-"))
+        _remove_unpacked_of_dead_processes()
+        folder = Path(tempfile.mkdtemp(prefix=f"{_TEMP_PREFIX}{os.getpid()}-"))
         atexit.register(shutil.rmtree, folder, True)
         try:
-            with zipfile.ZipFile(path) as archive:
-                for member in archive.namelist():        # nothing may land outside the folder
-                    target = (folder / member).resolve()
-                    if not str(target).startswith(str(folder.resolve())):
-                        raise ScenarioError(f"{path}: archive member {member!r} points outside "
-                                            f"the archive")
-                archive.extractall(folder)
-        except zipfile.BadZipFile:
-            raise ScenarioError(f"{path}: not an SSP archive (not a zip file)") from None
+            _extract(path, folder)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
         _UNPACKED[key] = folder
     return _UNPACKED[key]
 
 
+def _extract(path: Path, folder: Path) -> None:
+    """Unpack the regular files of the archive into folder, counting what is written (the
+    sizes its directory claims may lie)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = archive.infolist()
+            if len(members) > MAX_MEMBERS:
+                raise ScenarioError(f"{path}: {len(members)} archive members; an SSP system "
+                                    f"holds at most {MAX_MEMBERS}")
+            written = 0
+            root = folder.resolve()
+            for member in members:
+                target = (folder / member.filename).resolve()
+                if target != root and root not in target.parents:
+                    raise ScenarioError(f"{path}: archive member {member.filename!r} points "
+                                        f"outside the archive")
+                mode = member.external_attr >> 16
+                if member.is_dir():
+                    target.mkdir(parents=True, exist_ok=True)
+                    continue
+                if mode and not stat.S_ISREG(mode):
+                    raise ScenarioError(f"{path}: archive member {member.filename!r} is not a "
+                                        f"regular file (a link or a device)")
+                target.parent.mkdir(parents=True, exist_ok=True)
+                with archive.open(member) as src, open(target, "wb") as dst:
+                    for chunk in iter(lambda: src.read(1 << 20), b""):
+                        written += len(chunk)
+                        if written > MAX_UNPACKED_BYTES:
+                            raise ScenarioError(
+                                f"{path}: unpacks to more than {MAX_UNPACKED_BYTES / 2**30:g} "
+                                f"GiB (a zip bomb?); refused")
+                        dst.write(chunk)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as err:
+        raise ScenarioError(f"{path}: not an SSP archive sewfmu can read ({err})") from None
+
+
+def _remove_unpacked_of_dead_processes() -> None:
+    """A killed process cannot remove its unpacked archives: the next one does."""
+    for folder in Path(tempfile.gettempdir()).glob(f"{_TEMP_PREFIX}*-*"):
+        pid = folder.name[len(_TEMP_PREFIX):].split("-", 1)[0]
+        if pid.isdigit() and int(pid) != os.getpid() and not alive(int(pid)):
+            shutil.rmtree(folder, ignore_errors=True)
+
+
 def _xml(file: Path, where: Path) -> ET.Element:
     try:
+        if file.stat().st_size > MAX_XML_BYTES:
+            raise ScenarioError(f"{where}: {file.name} is larger than {MAX_XML_BYTES >> 20} MiB")
         return ET.fromstring(file.read_bytes())
     except ET.ParseError as err:
         raise ScenarioError(f"{where}: {file.name} is not well-formed XML: {err}") from None
@@ -144,7 +222,11 @@ def _parameters(comp: ET.Element, base: Path, where: str) -> dict:
     for binding in comp.iterfind(f"{_q(SSD, 'ParameterBindings')}/{_q(SSD, 'ParameterBinding')}"):
         prefix = binding.get("prefix", "")
         if binding.get("source"):
-            pset = _xml(base / binding.get("source"), Path(where.split(":")[0]))
+            file = _inside(base, binding.get("source"))
+            if file is None:
+                raise ScenarioError(f"{where}: parameter values {binding.get('source')!r} are "
+                                    f"not a file inside the system's archive or folder")
+            pset = _xml(file, Path(where.split(":")[0]))
             if pset.tag != _q(SSV, "ParameterSet"):
                 raise ScenarioError(f"{where}: {binding.get('source')} is not an "
                                     f"ssv:ParameterSet")

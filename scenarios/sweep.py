@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .format import Scenario, ScenarioError, label_of, parse_value
-from .outputs import remove_debris, write_atomic
+from .outputs import folder_for, remove_debris, write_atomic
 
 POINTS_FILE = "points.jsonl"
 TABLE_FILE = "sweep.csv"
@@ -121,7 +121,7 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
         result = simulate(sc)
         figures = summarize(result)
         if results_dir:
-            write_csv(result, Path(results_dir) / point.label / "results.csv")
+            write_csv(result, folder_for(Path(results_dir), point.label) / "results.csv")
     except Exception as err:                     # recorded, and the sweep goes on
         return failed_row(row, err)
     figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step", "units")}
