@@ -24,7 +24,8 @@ import numpy as np
 from fmpy.fmi1 import FMICallException
 
 from .coupling import SavedStates, rate_chains
-from .master import JacobiMaster, RunResult
+from .format import ScenarioError
+from .master import JacobiMaster, RunResult, max_rows
 
 GROWTH = 4.0
 SHRINK = 0.25
@@ -48,6 +49,8 @@ class AdaptiveMaster(JacobiMaster):
         self.chains = rate_chains(self.instances)
         self.scale = np.array([abs(c.unit.in_buf[c.value]) for c in self.chains])
         self.rejected = 0
+        self.dense_t = self.scenario.last_revolution_start() - nominal if self.every > 1 else 0.0
+        self.max_rows = max_rows(len(self.columns))
         self.times: list[float] = [0.0]
         self.rows: list[np.ndarray] = [self._data[0].copy()]
 
@@ -101,7 +104,13 @@ class AdaptiveMaster(JacobiMaster):
                                              for c in self.chains])
         growth = GROWTH if error == 0.0 else min(GROWTH, SAFETY * error ** (-1 / 3))
         self.h = min(self.h_max, max(self.h_min, h * max(growth, SHRINK)))
-        if self.k % self.every == 0 or self.finished():      # experiment.record_every
+        # experiment.record_every thins the records, but never in the last revolution
+        if self.k % self.every == 0 or self.finished() or self.t >= self.dense_t:
+            if len(self.rows) >= self.max_rows:
+                raise ScenarioError(
+                    f"{self.scenario.source}: the adaptive master's records reached "
+                    f"{len(self.rows):,} points at t = {self.t:g} s, the most this machine's "
+                    f"memory holds: set experiment.record_every, or a looser tolerance")
             row = np.empty(len(self.columns))
             self._record(row[None, :], 0)
             self.times.append(self.t)

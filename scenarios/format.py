@@ -162,6 +162,23 @@ class Scenario:
         n = max(1, math.ceil(end / self.step * (1.0 - 1e-12)))
         return n, end / n
 
+    def last_revolution_start(self) -> float:
+        """The time the last whole revolution of the counted shaft begins (0 where the scenario
+        has no MainShaft to count): from there on every step is recorded, whatever
+        experiment.record_every thins out before, so that the key figures never depend on it."""
+        from components.parameters import ParameterError, with_values
+        from components.shaft import MainShaft, ShaftParams
+
+        shaft = self.shaft or self.default_shaft()
+        if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
+            return 0.0
+        try:
+            model = MainShaft(with_values(ShaftParams(), **self.instances[shaft].parameters))
+        except ParameterError:
+            return 0.0
+        turns = math.floor(model.state(self.end_time())[0] / (2 * math.pi) + 1e-9)
+        return model.time_of_angle(2 * math.pi * (turns - 1)) if turns >= 1 else 0.0
+
     def default_shaft(self) -> str | None:
         """The MainShaft whose revolutions count when experiment.shaft names none: the
         analysis's shaft, or the only MainShaft."""

@@ -29,6 +29,7 @@ import atexit
 import contextlib
 import ctypes
 import math
+import os
 import shutil
 import sys
 import time as clock
@@ -146,6 +147,43 @@ def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
                                     f"{v.unit or ''}: outside the range [{_g(low, '-inf')}, "
                                     f"{_g(high, 'inf')}] {inst.name} ({md.modelName}) declares"
                                     f"{_unit_hint(v.unit, value)}")
+
+
+MAX_STEPS = 10**9
+# the records of one run may take this share of the memory available when it starts, and
+# never more than RECORD_BUDGET (records beyond it are for a file, not for memory)
+MEMORY_SHARE = 0.25
+RECORD_BUDGET = 1 << 30
+
+
+def _available_memory() -> int:
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+def max_rows(columns: int) -> int:
+    """The most records of `columns` columns a run may keep (as Python rows: 128 bytes more
+    each, besides the values)."""
+    return int(_budget() / ((columns + 1) * 8 + 128))
+
+
+def _budget() -> float:
+    return min(RECORD_BUDGET, MEMORY_SHARE * _available_memory())
+
+
+def check_memory(rows: int, columns: int, source: str, what: str = "records") -> None:
+    """Refuse, up front and with the numbers, a run whose records would not fit in memory."""
+    need = rows * (columns + 1) * 8
+    if need > _budget():
+        every = math.ceil(need / _budget())
+        raise ScenarioError(f"{source}: the {what} would take {need / 2**30:.3g} GiB ({rows:,} "
+                            f"points × {columns + 1} columns), more than the "
+                            f"{_budget() / 2**30:.3g} GiB a run may keep: record fewer "
+                            f"points (experiment.record_every = {every} or more; the key "
+                            f"figures are read from every step of the last revolution all the "
+                            f"same), record fewer columns, or take a longer step")
 
 
 def _number_or_none(text) -> float | None:
@@ -550,6 +588,11 @@ class Master:
             raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
                                 f"run ({self.stop:g} s)")
         self.n_steps, self.h = sc.even_steps()
+        if self.n_steps > MAX_STEPS:
+            raise ScenarioError(f"{sc.source}: {self.n_steps:.3g} communication steps (end "
+                                f"{self.stop:g} s at a step of {sc.step:g} s) are more than "
+                                f"{MAX_STEPS:.0e}: days of stepping; take a longer "
+                                f"experiment.step or a shorter run")
         sc.master_settings()         # a tolerance the master cannot honour: refused here
         self.every = max(1, int(sc.record_every))
         self.log = LogCollector()
@@ -563,7 +606,12 @@ class Master:
             for unit in self.instances:
                 self._initialize(unit, self.stop)
         self.watch = DivergenceWatch(self.in_loops, self.h) if self.in_loops else None
-        self._rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
+        # every step from one step before the last whole revolution on (the analyses' window)
+        self.dense_from = 0 if self.every == 1 else \
+            max(0, int(sc.last_revolution_start() / self.h) - 1)
+        dense = self.n_steps - self.dense_from if self.every > 1 else 0
+        self._rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0) + dense
+        check_memory(self._rows, len(self.columns), sc.source)
         self._data = np.empty((self._rows, len(self.columns)))
         self._times = np.empty(self._rows)
         self._row = 0
@@ -581,7 +629,7 @@ class Master:
         if self.watch is not None:
             self.watch.check(t + h)
         self.k += 1
-        if self.k % self.every == 0 or self.k == self.n_steps:
+        if self.k % self.every == 0 or self.k == self.n_steps or self.k >= self.dense_from:
             self._record_row(self.stop if self.k == self.n_steps else self.k * h)
 
     def save_state(self) -> tuple:
