@@ -167,7 +167,7 @@ def _extract(path: Path, folder: Path) -> None:
                 if member.is_dir():
                     target.mkdir(parents=True, exist_ok=True)
                     continue
-                if mode and not stat.S_ISREG(mode):
+                if stat.S_IFMT(mode) not in (0, stat.S_IFREG):    # zip tools may give no type
                     raise ScenarioError(f"{path}: archive member {member.filename!r} is not a "
                                         f"regular file (a link or a device)")
                 target.parent.mkdir(parents=True, exist_ok=True)

@@ -70,10 +70,17 @@ def test_the_adaptive_master_runs_the_one_way_scenarios(fmu_paths, name, figure,
     assert summarize(result)[figure] == pytest.approx(fixed[figure], abs=within)
 
 
-def test_record_every_keeps_every_nth_accepted_step(fmu_paths):
+def test_record_every_thins_the_records_but_not_the_key_figures(fmu_paths):
     sc = load("punch_drive")
-    sc.master, sc.record_every, sc.revolutions = "adaptive", 10, 2
+    sc.master, sc.revolutions = "adaptive", 2
+    every_step = run(sc, fmu_paths)
+    sc.record_every = 10
     result = run(sc, fmu_paths)
-    assert len(result.time) == result.coupling["steps"] // 10 + 1 + (
-        result.coupling["steps"] % 10 != 0)
+    steps = result.coupling["steps"]
+    last = result.time >= sc.last_revolution_start()
+    # thinned before the last revolution, every accepted step within it
+    assert (~last).sum() < 0.2 * (~(every_step.time >= sc.last_revolution_start())).sum()
+    assert last.sum() == (every_step.time >= sc.last_revolution_start()).sum()
+    assert len(result.time) < steps
     assert result.time[-1] == pytest.approx(sc.end_time(), rel=1e-12)
+    assert summarize(result) | {"wall_time_s": 0} == summarize(every_step) | {"wall_time_s": 0}
