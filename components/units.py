@@ -56,7 +56,8 @@ def in_unit(text: str, unit: str) -> float:
     by the display units above. Raises UnitError saying which units fit."""
     match = _VALUE_WITH_UNIT.match(text)
     if match is None:
-        raise UnitError(f"expected a number with its unit, like \"110 deg\", got {text!r}")
+        raise UnitError(f"must be a number, or a number with its unit like \"110 deg\"; got "
+                        f"{text!r}")
     value, given = float(match.group(1)), match.group(2)
     given = given.strip()
     if given in ("", unit):

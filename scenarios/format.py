@@ -38,7 +38,6 @@ import codecs
 import copy
 import hashlib
 import math
-import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -267,16 +266,16 @@ class Scenario:
             self.stop_time = None
 
 
-_INSTANCE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
-
-
 def check_instance_name(name: str) -> None:
     """An instance name becomes part of column names (instance.variable) and of folder names
     (`instance.parameter=value`): a letter or '_' first, then letters, digits, '_' or '-', at
     most 64 characters, and not 'experiment'. Raises ValueError saying so."""
-    if not isinstance(name, str) or not _INSTANCE_NAME.match(name) or name == "experiment":
+    # letters of any script: an engineer may name the instances in the machine shop's language
+    if not isinstance(name, str) or not 0 < len(name) <= 64 or name == "experiment" \
+            or not (name[0].isalpha() or name[0] == "_") \
+            or not all(ch.isalnum() or ch in "_-" for ch in name):
         raise ValueError(f"an instance name starts with a letter or '_' and holds only letters, "
-                         f"digits, '_' and '-' (at most 64; not 'experiment'), got {name!r}")
+                         f"digits, '_' and '-' (no '.', path separators or spaces; at most 64; not 'experiment'), got {name!r}")
 
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:

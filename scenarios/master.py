@@ -143,10 +143,11 @@ def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
                                     f"got {value!r}")
             low, high = _number_or_none(v.min), _number_or_none(v.max)
             if (low is not None and value < low) or (high is not None and value > high):
-                raise ScenarioError(f"{scenario.source}: {inst.name}.{key} = {value:g} "
-                                    f"{v.unit or ''}: outside the range [{_g(low, '-inf')}, "
-                                    f"{_g(high, 'inf')}] {inst.name} ({md.modelName}) declares"
-                                    f"{_unit_hint(v.unit, value)}")
+                hint = _unit_hint(v.unit, value) if high is not None and value > high else ""
+                raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: parameter {key} = "
+                                    f"{value:g} {v.unit or ''} is outside the range "
+                                    f"[{_g(low, '-inf')}, {_g(high, 'inf')}] {inst.name} "
+                                    f"({md.modelName}) declares{hint}")
 
 
 MAX_STEPS = 10**9

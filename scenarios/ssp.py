@@ -90,8 +90,9 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
     # the step that meets the stop time in whole, even steps: a fixed-step tool ends there
-    settings = {"step": scenario.even_steps()[1], "master": scenario.master,
-                **scenario.master_settings()}
+    # (the adaptive master's step is its first step, not a grid)
+    step = scenario.step if scenario.master == "adaptive" else scenario.even_steps()[1]
+    settings = {"step": step, "master": scenario.master, **scenario.master_settings()}
     ET.SubElement(note, _q(SEWFMU, "Experiment"),
                   {k: repr(v) if isinstance(v, float) else v for k, v in settings.items()})
     ET.indent(root)

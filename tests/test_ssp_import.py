@@ -44,7 +44,8 @@ def test_an_exported_catalogue_scenario_read_back_gives_the_same_figures(tmp_pat
                                                                           scenario):
     ssp = export(scenario, tmp_path / f"{name}.ssp")
     back = load(str(ssp))
-    assert back.analysis == scenario.analysis and back.step == scenario.step
+    assert back.analysis == scenario.analysis and back.step == (scenario.step if scenario.master == "adaptive"
+                                                        else scenario.even_steps()[1])
     assert _figures(back) == _figures(scenario)
 
 
@@ -153,7 +154,7 @@ def test_an_fmu_that_sewfmu_did_not_build_runs(tmp_path, fmu_paths):
     out = tmp_path / "out"
     assert main(["run", str(ssp), "--set", "experiment.step=1e-3", "--out", str(out)]) == 0
     result = (out / "results.csv").read_text().splitlines()
-    header = result[0].split(",")
+    header = [name.split(" [")[0] for name in result[0].split(",")]   # "name [unit]"
     last = dict(zip(header, map(float, result[-1].split(","))))
     assert last["x2.y"] == pytest.approx(2 * last["motor.omega"])
     summary = json.loads((out / "summary.json").read_text())
