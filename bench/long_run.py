@@ -7,9 +7,9 @@ import argparse
 import time
 from pathlib import Path
 
-from scenarios.format import load
-from scenarios.master import JacobiMaster
-from scenarios.runner import fmus_for
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import JacobiMaster
+from sewfmu.scenarios.runner import fmus_for
 
 
 def rss_mib() -> float:

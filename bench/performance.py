@@ -22,17 +22,17 @@ import time
 from pathlib import Path
 
 
-from components.build import ensure_built
-from components.catalogue import FMUS
-from scenarios.format import Connection, Instance, Scenario, load
-from scenarios.master import run
-from scenarios.runner import monolithic_summary, simulate, summarize
+from sewfmu.components.build import ensure_built
+from sewfmu.components.catalogue import FMUS
+from sewfmu.scenarios.format import Connection, Instance, Scenario, load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import monolithic_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
 import math
-from scenarios import punch_monolithic
-from scenarios.analyses import punch
+from sewfmu.scenarios import punch_monolithic
+from sewfmu.scenarios.analyses import punch
 t_end = 10 * 2 * math.pi / 100.0
 ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,
                             sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-8, atol=1e-11)
@@ -49,7 +49,7 @@ def _wall(cmd) -> float:
 def whole_process(repeat: int) -> None:
     ensure_built(sorted(FMUS))                       # built once, outside the timing
     out = tempfile.mkdtemp(prefix="sewfmu_bench_")
-    cosim = [sys.executable, "-m", "scenarios.cli", "run", "punch_drive", "--out", out]
+    cosim = [sys.executable, "-m", "sewfmu", "run", "punch_drive", "--out", out]
     mono = [sys.executable, "-c", MONOLITHIC]
     _wall(cosim), _wall(mono)                        # warm the file cache
     t_cosim, t_mono = [], []

@@ -12,9 +12,9 @@ from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
 
-from components.build import ensure_built
-from components.catalogue import FMUS
-from scenarios.master import FmuInstance, LogCollector, extracted_fmu
+from sewfmu.components.build import ensure_built
+from sewfmu.components.catalogue import FMUS
+from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
 
 
 def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str]:

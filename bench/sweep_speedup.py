@@ -8,9 +8,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from scenarios.format import load
-from scenarios.runner import fmus_for
-from scenarios.sweep import points_of, run_sweep
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.runner import fmus_for
+from sewfmu.scenarios.sweep import points_of, run_sweep
 
 
 def timed(workers: int) -> float:

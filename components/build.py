@@ -29,10 +29,11 @@ from xml.etree import ElementTree
 import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
+from .._version import __version__
 from .catalogue import FMI_VERSIONS, FMUS
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-VERSION = "0.1.0"
+VERSION = __version__     # sewfmu's one version (sewfmu/_version.py)
 
 
 # The FMU's entry script. pythonfmu 0.7.0's binary imports it as a module and then, at every

@@ -6,6 +6,7 @@ description and default are written exactly once.
 """
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
@@ -113,7 +114,9 @@ def with_values(params, **values):
     known = {info.name for info in parameter_info(type(params))}
     for name in values:
         if name not in known:
-            raise ParameterError(name, f"unknown parameter of {type(params).__name__} "
+            close = difflib.get_close_matches(name, sorted(known), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise ParameterError(name, f"unknown parameter of {type(params).__name__}{hint} "
                                        f"(known: {', '.join(sorted(known))})")
     new = replace(params, **values)
     validate(new)

@@ -1,4 +1,4 @@
-"""`sewfmu`: the command line, a thin layer over components.build and scenarios.runner."""
+"""`sewfmu`: the command line, a thin layer over the functions of sewfmu.api."""
 from __future__ import annotations
 
 import argparse
@@ -6,6 +6,7 @@ import os
 import sys
 from pathlib import Path
 
+from .._version import __version__
 from .format import ScenarioError, catalogue, label_of, load, parse_value
 from .interrupt import Interrupted, interrupt_on_sigterm
 
@@ -21,7 +22,7 @@ def _load_with_sets(name: str, sets: list[str]):
 
 
 def cmd_build(args) -> None:
-    from components.build import build_all, default_fmu_dir
+    from ..components.build import build_all, default_fmu_dir
 
     dest = default_fmu_dir(args.fmi, Path(args.dest) if args.dest else None)
     for path in build_all(dest, fmi=args.fmi):
@@ -29,12 +30,14 @@ def cmd_build(args) -> None:
 
 
 def cmd_list(args) -> None:
-    from components.catalogue import FMUS
+    import importlib
+
+    from ..components.catalogue import FMUS
 
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
-        import importlib
-        doc = getattr(importlib.import_module(f"components.{module}"), slave).__doc__
+        doc = getattr(importlib.import_module(f"..components.{module}", __package__),
+                      slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
     from .runner import STUDIES
 
@@ -103,8 +106,7 @@ def cmd_compare(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from . import analyses
-    from .sweep import parse_grid_option, plot_table, points_of, run_sweep
+    from .sweep import parse_grid_option, points_of, run_sweep, sweep_pictures
 
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
@@ -119,15 +121,15 @@ def cmd_sweep(args) -> None:
         print(f"  failed: {values}: {row['error']}")
     if rows and len(failed) == len(rows):
         raise ScenarioError(f"every point of the sweep failed (see {out}/sweep.csv)")
-    swept = [name for name, _ in points[0].values]
-    picture = out / f"{scenario.name}_sweep.png"
-    if (args.plot or args.report) and scenario.analysis:
-        figures = [f for f in analyses.module(scenario.analysis).FIGURES if f != "n_contacts"]
-        plot_table(rows, swept, figures, picture, scenario.description)
-    if args.report:
-        from .report import sweep_report
-        sweep_report(out / "report.html", scenario, rows, swept,
-                     picture if scenario.analysis else None)
+    if args.plot or args.report:
+        sweep_pictures(scenario, rows, [name for name, _ in points[0].values], out,
+                       report=args.report)
+
+
+def cmd_show(args) -> None:
+    from ..api import show
+
+    sys.stdout.write(show(args.scenario))
 
 
 def cmd_export_ssp(args) -> None:
@@ -138,7 +140,7 @@ def cmd_export_ssp(args) -> None:
 
 
 def cmd_references(args) -> None:
-    from components.catalogue import FMUS
+    from ..components.catalogue import FMUS
 
     from . import regression as references
     from .runner import fmus_for_names
@@ -210,6 +212,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="sewfmu", description="Sewing-machine mechanisms as "
                                      "FMI 2.0 and 3.0 co-simulation FMUs, and scenarios that connect them.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
+    parser.add_argument("--version", action="version", version=f"sewfmu {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("build", help="build every FMU into fmus/ (FMI 3.0: fmus/fmi3/)")
     p.add_argument("--dest", help="output folder (default: fmus/; with --fmi 3 its fmi3/)")
@@ -238,6 +241,9 @@ def main(argv=None) -> int:
             p.add_argument("--report", action="store_true",
                            help="report.html: one self-contained page with figures, plots, "
                                 "the animation and what was run")
+    p = sub.add_parser("show", help="print a catalogue scenario as TOML, to save and change")
+    p.add_argument("scenario", help="catalogue name (or path to a .toml file)")
+    p.set_defaults(func=cmd_show)
     p = sub.add_parser("export-ssp", help="the scenario as an SSP 1.0 archive for other tools")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
     p.add_argument("-o", "--output", required=True, help="the .ssp file to write")

@@ -30,7 +30,8 @@
     "shaft.omega0" = [100.0, 200.0, 300.0]
     "punch.F30" = [0.0, 5.0, 10.0]
 
-Every mistake is a ScenarioError that names the file and the key.
+Every key, with its meaning, default and an example: docs/scenarios.md (the experiment's keys:
+scenarios/experiment.py). Every mistake is a ScenarioError that names the file and the key.
 """
 from __future__ import annotations
 
@@ -44,7 +45,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from components.catalogue import FMI_VERSIONS, FMUS, parameter_units
+from ..components.catalogue import FMI_VERSIONS, FMUS, parameter_units
+from .experiment import EXPERIMENT_KEYS
 
 MASTERS = ("jacobi", "gauss-seidel", "iterative", "adaptive")
 ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
@@ -136,8 +138,8 @@ class Scenario:
         experiment.revolutions with its parameters (its speed ramp included)."""
         if self.stop_time is not None:
             return self.stop_time
-        from components.parameters import ParameterError, with_values
-        from components.shaft import MainShaft, ShaftParams
+        from ..components.parameters import ParameterError, with_values
+        from ..components.shaft import MainShaft, ShaftParams
 
         if self.shaft is None:        # revolutions set later (--set)
             self.shaft = self.default_shaft()
@@ -165,8 +167,8 @@ class Scenario:
         """The time the last whole revolution of the counted shaft begins (0 where the scenario
         has no MainShaft to count): from there on every step is recorded, whatever
         experiment.record_every thins out before, so that the key figures never depend on it."""
-        from components.parameters import ParameterError, with_values
-        from components.shaft import MainShaft, ShaftParams
+        from ..components.parameters import ParameterError, with_values
+        from ..components.shaft import MainShaft, ShaftParams
 
         shaft = self.shaft or self.default_shaft()
         if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
@@ -193,7 +195,8 @@ class Scenario:
             self._set_experiment(key, value, origin)
             return
         if inst not in self.instances:
-            raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source} "
+            raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source}"
+                                f"{did_you_mean(inst, self.instances)} "
                                 f"(instances: {', '.join(self.instances)})")
         if isinstance(value, str):          # a value with its unit: "110 deg", "955 rpm"
             value = self._in_declared_unit(inst, key, value, f"{origin} {target}")
@@ -211,7 +214,7 @@ class Scenario:
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
-        from components.units import UnitError, in_unit
+        from ..components.units import UnitError, in_unit
 
         fmu = self.instances[inst].fmu
         units = (_declared_units(self.fmu_files[fmu]) if fmu in self.fmu_files
@@ -248,12 +251,19 @@ class Scenario:
                                     f">= 1, got {value!r}")
             self.record_every = value
             return
+        if key == "shaft":
+            if value not in self.instances or self.instances[value].fmu != "MainShaft":
+                shafts = [n for n, i in self.instances.items() if i.fmu == "MainShaft"]
+                raise ScenarioError(f"{origin} experiment.shaft: must name a MainShaft instance "
+                                    f"({', '.join(shafts) or 'none here'}), got {value!r}")
+            self.shaft = value
+            return
         if key not in ("step", "stop_time", "revolutions"):
-            raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting "
-                                f"(step, stop_time, revolutions, master, record_every, "
-                                f"tolerance, acceleration, fmi)")
+            raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting"
+                                f"{did_you_mean(key, EXPERIMENT_KEYS)} "
+                                f"({', '.join(EXPERIMENT_KEYS)})")
         if isinstance(value, str) and key in ("step", "stop_time"):     # "0.25 ms", "2 s"
-            from components.units import UnitError, in_unit
+            from ..components.units import UnitError, in_unit
             try:
                 value = in_unit(value, "s")
             except UnitError as err:
@@ -346,7 +356,8 @@ def resolve(name_or_path: str) -> Path:
         return path
     known = catalogue()
     if name_or_path not in known:
-        raise ScenarioError(f"unknown scenario {name_or_path!r} (catalogue: "
+        raise ScenarioError(f"unknown scenario {name_or_path!r}"
+                            f"{did_you_mean(name_or_path, known)} (catalogue: "
                             f"{', '.join(sorted(known))}; or give a path to a .toml file)")
     return known[name_or_path]
 
@@ -404,13 +415,14 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
                  "instances", "compare", "sweep"}
     for key in data:
         if key not in known_top:
-            raise ScenarioError(f"{source}: unknown key {key!r} (known: {', '.join(sorted(known_top))})")
+            raise ScenarioError(f"{source}: unknown key {key!r}{did_you_mean(key, known_top)} "
+                                f"(known: {', '.join(sorted(known_top))})")
     exp = _table(data, "experiment", source)
-    known_exp = {"revolutions", "stop_time", "shaft", "step", "master", "record_every",
-                 "tolerance", "acceleration", "fmi"}
+    known_exp = EXPERIMENT_KEYS
     for key in exp:
         if key not in known_exp:
-            raise ScenarioError(f"{source}: unknown key experiment.{key} "
+            raise ScenarioError(f"{source}: unknown key experiment.{key}"
+                                f"{did_you_mean(key, known_exp)} "
                                 f"(known: {', '.join(sorted(known_exp))})")
     if ("revolutions" in exp) == ("stop_time" in exp):
         raise ScenarioError(f"{source}: [experiment] needs exactly one of revolutions, stop_time")
@@ -436,12 +448,14 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
             raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
         for key in spec:
             if key not in ("fmu", "parameters"):
-                raise ScenarioError(f"{where}: unknown key {key!r} (fmu, parameters)")
+                raise ScenarioError(f"{where}: unknown key {key!r}"
+                                    f"{did_you_mean(key, ('fmu', 'parameters'))} (fmu, parameters)")
         params = spec.get("parameters", {})
         if not isinstance(params, dict):
             raise ScenarioError(f"{where}.parameters must be a table")
         if spec["fmu"] not in FMUS:
-            raise ScenarioError(f"{where}: unknown FMU {spec['fmu']!r} (known: {', '.join(FMUS)})")
+            raise ScenarioError(f"{where}: unknown FMU {spec['fmu']!r}"
+                                f"{did_you_mean(spec['fmu'], FMUS)} (known: {', '.join(FMUS)})")
         inst = Instance(inst_name, spec["fmu"], {})
         instances[inst_name] = inst
     scenario = Scenario(
@@ -572,6 +586,7 @@ def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
         if not dot or not var:
             raise ScenarioError(f"{where}: {end!r} is not instance.variable")
         if inst not in instances:
-            raise ScenarioError(f"{where}: unknown instance {inst!r}")
+            raise ScenarioError(f"{where}: unknown instance {inst!r}"
+                                f"{did_you_mean(inst, instances)}")
         ends.append((inst, var))
     return Connection(ends[0][0], ends[0][1], ends[1][0], ends[1][1])

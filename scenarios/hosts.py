@@ -5,7 +5,7 @@ os._exit: those hosts free and unload the FMU libraries as they shut down, which
 binary does not survive inside a Python process (see README). The parent reads the CSV back as a
 RunResult, so `sewfmu crosscheck` summarizes it exactly like sewfmu's own run.
 
-    python -m scenarios.hosts libcosim|ecos SSP STEP STOP RECORD_JSON OUT_CSV
+    python -m sewfmu.scenarios.hosts libcosim|ecos SSP STEP STOP RECORD_JSON OUT_CSV
 """
 from __future__ import annotations
 
@@ -226,7 +226,7 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
     error_file = Path(str(out_csv) + ".error")
     error_file.unlink(missing_ok=True)
     started = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "scenarios.hosts", host, str(ssp),
+    proc = subprocess.run([sys.executable, "-m", "sewfmu.scenarios.hosts", host, str(ssp),
                            repr(scenario.even_steps()[1]), repr(scenario.end_time()),
                            json.dumps(record),
                            str(out_csv)], capture_output=True, text=True, timeout=timeout)

@@ -200,7 +200,7 @@ def _g(value, unbounded: str) -> str:
 
 def _unit_hint(unit: str | None, value: float) -> str:
     """How a value out of range may have been meant: with the unit users think in."""
-    from components.units import DISPLAY_UNITS
+    from ..components.units import DISPLAY_UNITS
 
     displays = list(DISPLAY_UNITS.get(unit or "", {}))
     return (f" (meant in {displays[0]}? give the unit: \"{value:g} {displays[0]}\")"

@@ -16,10 +16,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from components.parameters import with_values
-from components.punch_contact import GRAVITY, PunchContactParams
-from components.punch_linkage import PunchLinkage, PunchLinkageParams
-from components.shaft import MainShaft, ShaftParams
+from ..components.parameters import with_values
+from ..components.punch_contact import GRAVITY, PunchContactParams
+from ..components.punch_linkage import PunchLinkage, PunchLinkageParams
+from ..components.shaft import MainShaft, ShaftParams
 
 from .sampling import sampled
 

@@ -43,7 +43,7 @@ def _shaft(omega: float):
 
 
 def _punch_inputs(t):
-    from components.punch_linkage import PunchLinkage
+    from ..components.punch_linkage import PunchLinkage
     e = sampled(PunchLinkage().motion, 200.0 * t, 200.0, 0.0)
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}
 
@@ -64,7 +64,7 @@ def _fabric_inputs(t):
 
 
 def _carriage_inputs(t):
-    from components.carriage import CarriageDrive
+    from ..components.carriage import CarriageDrive
     omega = 1600 * 2 * math.pi / 60
     _, _, a, jerk = sampled(CarriageDrive().motion, omega * t, omega, 0.0)
     return {"a_base": a, "a_base_dot": jerk}

@@ -177,7 +177,7 @@ def study_report(path: Path, name: str, description: str, headline: dict, pictur
     shown = Section("Pictures")
     shown.pictures([(description, picture)])
     what = Section("What was run")
-    from components.build import VERSION
+    from ..components.build import VERSION
     what.table(["", ""], [["study", name], ["sewfmu", VERSION]])
     write(path, f"sewfmu: {name}", description, [figures, shown, what])
 

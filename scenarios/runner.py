@@ -1,6 +1,6 @@
 """Run a scenario end to end: build what is missing, co-simulate, write results, plot, compare.
 
-These are the functions behind the command line; they are meant to be called from Python too.
+The functions behind the command line and behind sewfmu's Python API (sewfmu/api.py).
 """
 from __future__ import annotations
 
@@ -13,9 +13,10 @@ from typing import Callable
 
 import numpy as np
 
-from components.build import default_fmu_dir, ensure_built
+from ..components.build import default_fmu_dir, ensure_built
 
 from . import analyses
+from .experiment import experiment_of
 from .format import Scenario, ScenarioError, label_of
 from .master import RunResult, run
 from .outputs import folder_for, replacing, write_atomic
@@ -90,7 +91,7 @@ def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
 
 
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
-    from components.catalogue import FMUS
+    from ..components.catalogue import FMUS
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
     if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
@@ -152,7 +153,7 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     """What produced a run: the scenario (file and its hash), every parameter value each instance
     ran with (defaults included; `set` marks the scenario's own values), the master and step,
     sewfmu's version and each FMU's version with the hash of the code it carries."""
-    from components.build import VERSION
+    from ..components.build import VERSION
 
     from .master import extracted_fmu
 
@@ -167,7 +168,7 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     return {"scenario": {"name": scenario.name, "source": scenario.source,
                          "sha256": scenario.digest or None},
             "instances": instances, "master": scenario.master, "step": scenario.step,
-            **scenario.master_settings(),
+            **scenario.master_settings(), "experiment": experiment_of(scenario),
             "end_time": scenario.end_time(), "sewfmu": VERSION,
             "fmus": {fmu: md.version for fmu, md in sorted(described.items())},
             "fmi": {fmu: md.fmiVersion for fmu, md in sorted(described.items())}}
@@ -180,18 +181,10 @@ def _number(text: str) -> float | int:
         else value
 
 
-def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
-                 fmu_dir: Path | None = None, progress=None, animate: bool = False,
-                 report: bool = False) -> dict:
-    """Run (each variant of) a scenario into out_dir; return the summary written there.
-
-    Every run of the scenario is done before out_dir is touched, and what it writes then takes
-    the place of what the previous run wrote (outputs.replacing): a failed or interrupted run
-    leaves the previous results as they were. `progress(label, done, total)` hears of each run's steps. `animate` adds a GIF of each
-    run of a mechanism; `report` a self-contained report.html (with the plots, the animations
-    and, for the punch drive, the comparison with the monolithic solution)."""
-    from . import animations
-
+def run_variants(scenario: Scenario, fmu_dir: Path | None = None,
+                 progress=None) -> list[tuple[str, RunResult, dict]]:
+    """Run each variant of a scenario (one, or one per value of [compare]): (label, result,
+    its summary with provenance) for each. `progress(label, done, total)` hears of the steps."""
     runs = []
     for label, sc in variants(scenario):
         paths = fmus_for(sc, fmu_dir)
@@ -199,11 +192,38 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
             (lambda done, total, label=label: progress(label, done, total))
         result = run(sc, paths, report_steps)
         runs.append((label, result, {**summarize(result), "provenance": provenance(sc, paths)}))
+    return runs
+
+
+def summary_of_runs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]]) -> dict:
+    """What summary.json holds: the run's summary, or for [compare] each variant's by label."""
     if scenario.compare:
-        summary = {"scenario": scenario.name, "compare": scenario.compare["parameter"],
-                   "runs": {label: s for label, _, s in runs}}
-    else:
-        summary = runs[0][2]
+        return {"scenario": scenario.name, "compare": scenario.compare["parameter"],
+                "runs": {label: s for label, _, s in runs}}
+    return runs[0][2]
+
+
+def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
+                 fmu_dir: Path | None = None, progress=None, animate: bool = False,
+                 report: bool = False) -> dict:
+    """Run (each variant of) a scenario into out_dir; return the summary written there."""
+    runs = run_variants(scenario, fmu_dir, progress)
+    write_outputs(scenario, runs, out_dir, plot=plot, animate=animate, report=report)
+    return summary_of_runs(scenario, runs)
+
+
+def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], out_dir: Path,
+                  plot: bool = False, animate: bool = False, report: bool = False) -> None:
+    """Write the runs into out_dir: results.csv and summary.json (a folder per variant), and
+    as asked PNG plots, GIF animations, report.html.
+
+    Every run is done before out_dir is touched, and what is written then takes the place of
+    what the previous run wrote (outputs.replacing): a failed or interrupted run leaves the
+    previous results as they were. `report` is a self-contained page with the plots, the
+    animations and, for the punch drive, the comparison with the monolithic solution."""
+    from . import animations
+
+    summary = summary_of_runs(scenario, runs)
     against_monolithic = {}
     if report and scenario.analysis in MONOLITHIC:
         for label, result, own in runs:
@@ -229,7 +249,6 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
         if report:
             from .report import run_report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
-    return summary
 
 
 def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, object, object]]:

@@ -16,7 +16,8 @@ from xml.etree import ElementTree as ET
 
 from fmpy import read_model_description
 
-from components.units import UNITS
+from ..components.units import UNITS
+from .experiment import ssp_settings
 
 from .format import Scenario
 from .master import kind_of
@@ -92,7 +93,7 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     # the step that meets the stop time in whole, even steps: a fixed-step tool ends there
     # (the adaptive master's step is its first step, not a grid)
     step = scenario.step if scenario.master == "adaptive" else scenario.even_steps()[1]
-    settings = {"step": step, "master": scenario.master, **scenario.master_settings()}
+    settings = ssp_settings(scenario, step)
     ET.SubElement(note, _q(SEWFMU, "Experiment"),
                   {k: repr(v) if isinstance(v, float) else v for k, v in settings.items()})
     ET.indent(root)

@@ -25,6 +25,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from .experiment import EXPERIMENT_KEYS
 from .format import (Connection, Instance, Scenario, ScenarioError, check_instance_name,
                      check_one_source)
 from .outputs import alive
@@ -289,23 +290,24 @@ def _stop_time(root: ET.Element, where: str) -> float:
 
 
 def _experiment(root: ET.Element) -> dict:
-    """The communication step, master, tolerance and acceleration from sewfmu's annotation;
-    where the file gives no step, 0 (the run then asks for --set experiment.step)."""
+    """The experiment keys sewfmu's annotation carries (scenarios/experiment.py: step, master,
+    tolerance, acceleration); where the file gives no step, 0 (the run then asks for --set
+    experiment.step). A value that is not valid is left at its default."""
     from .format import ACCELERATIONS, MASTERS
 
     found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken"}
+    valid = {"step": float, "tolerance": float,
+             "master": lambda text: MASTERS[MASTERS.index(text)],
+             "acceleration": lambda text: ACCELERATIONS[ACCELERATIONS.index(text)]}
+    carried = [name for name, key in EXPERIMENT_KEYS.items() if key.in_ssp]
     for note in root.iter(_q(SSC, "Annotation")):
         if note.get("type") == ANNOTATION:
             for element in note.iter():
-                for key in ("step", "tolerance"):
+                for name in carried:
                     try:
-                        found[key] = float(element.get(key, found[key]))
+                        found[name] = valid[name](element.get(name))
                     except (TypeError, ValueError):
                         pass
-                if element.get("master") in MASTERS:
-                    found["master"] = element.get("master")
-                if element.get("acceleration") in ACCELERATIONS:
-                    found["acceleration"] = element.get("acceleration")
     return found
 
 

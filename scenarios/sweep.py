@@ -25,6 +25,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from .experiment import experiment_of
 from .format import Scenario, ScenarioError, label_of, parse_value
 from .outputs import folder_for, remove_debris, write_atomic
 
@@ -50,18 +51,14 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from components.build import fmu_version
+    from ..components.build import fmu_version
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
                       for n, i in scenario.instances.items()},
         "connections": [str(c) for c in scenario.connections],
         "record": scenario.record, "analysis": scenario.analysis, "roles": scenario.roles,
-        "experiment": {"step": scenario.step, "master": scenario.master,
-                       "stop_time": scenario.stop_time, "revolutions": scenario.revolutions,
-                       "shaft": scenario.shaft, "record_every": scenario.record_every,
-                       "tolerance": scenario.tolerance, "acceleration": scenario.acceleration,
-                       "fmi": scenario.fmi},
+        "experiment": experiment_of(scenario),
         "fmus": {fmu: fmu_version(Path(path)) for fmu, path in sorted(fmu_paths.items())},
     }
     return json.dumps(content, sort_keys=True, default=repr)
@@ -321,3 +318,19 @@ def plot_table(rows: list[dict], swept: list[str], figures: list[str], path: Pat
     fig.tight_layout()
     write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"), binary=True)
     plt.close(fig)
+
+
+def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_dir: Path,
+                   report: bool = False) -> None:
+    """The plot of every key figure against the swept parameters (SCENARIO_sweep.png) and, with
+    report, report.html beside sweep.csv."""
+    from . import analyses
+
+    picture = out_dir / f"{scenario.name}_sweep.png"
+    if scenario.analysis:
+        figures = [f for f in analyses.module(scenario.analysis).FIGURES if f != "n_contacts"]
+        plot_table(rows, swept, figures, picture, scenario.description)
+    if report:
+        from .report import sweep_report
+        sweep_report(out_dir / "report.html", scenario, rows, swept,
+                     picture if scenario.analysis else None)

@@ -3,10 +3,10 @@ read from non-uniform samples; rejected steps rolled back exactly; the one-way s
 import numpy as np
 import pytest
 
-from scenarios.adaptive import AdaptiveMaster
-from scenarios.format import load
-from scenarios.master import run
-from scenarios.runner import monolithic_summary, summarize
+from sewfmu.scenarios.adaptive import AdaptiveMaster
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import monolithic_summary, summarize
 
 
 def _adaptive(fmu_paths, name="punch_drive", tolerance=None):

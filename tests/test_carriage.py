@@ -7,12 +7,12 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
-from components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
-from scenarios.analyses.carriage import periodic_response, resonance_study
-from scenarios.format import load
-from scenarios.master import run
-from scenarios.runner import summarize
-from scenarios.sampling import sampled
+from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
+from sewfmu.scenarios.analyses.carriage import periodic_response, resonance_study
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import summarize
+from sewfmu.scenarios.sampling import sampled
 
 
 def _energy_stiffness(model: CarriageModal) -> np.ndarray:

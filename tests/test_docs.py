@@ -7,14 +7,14 @@ from pathlib import Path
 
 import pytest
 
-from components.carriage import CarriageDriveParams, CarriageParams
-from components.feed import FeedParams
-from components.parameters import parameter_info
-from components.punch_contact import PunchContactParams
-from components.punch_linkage import PunchLinkageParams
-from components.punch_split import FabricParams, PunchBodyParams
-from components.shaft import ShaftParams
-from components.takeup import TakeupParams
+from sewfmu.components.carriage import CarriageDriveParams, CarriageParams
+from sewfmu.components.feed import FeedParams
+from sewfmu.components.parameters import parameter_info
+from sewfmu.components.punch_contact import PunchContactParams
+from sewfmu.components.punch_linkage import PunchLinkageParams
+from sewfmu.components.punch_split import FabricParams, PunchBodyParams
+from sewfmu.components.shaft import ShaftParams
+from sewfmu.components.takeup import TakeupParams
 
 REPO = Path(__file__).resolve().parent.parent
 PAGES = {"punch_drive.md": (ShaftParams, PunchLinkageParams, PunchContactParams, PunchBodyParams,

@@ -19,10 +19,10 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.cli import main
-from scenarios.format import ScenarioError, load
-from scenarios.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
-from scenarios.workers import WorkerDied, run_tasks
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
+from sewfmu.scenarios.workers import WorkerDied, run_tasks
 
 REPO = Path(__file__).resolve().parent.parent
 PUNCH = (REPO / "scenarios" / "catalogue" / "punch_drive.toml").read_text()
@@ -51,7 +51,7 @@ def _log_rows(folder):
 
 
 def _sewfmu(*args, **kw):
-    return subprocess.Popen([sys.executable, "-m", "scenarios.cli", *args], cwd=kw.pop("cwd", REPO),
+    return subprocess.Popen([sys.executable, "-m", "sewfmu", *args], cwd=kw.pop("cwd", REPO),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
 
 
@@ -327,7 +327,7 @@ def test_a_compare_run_failing_in_its_third_variant_changes_nothing(tmp_path, ca
 @pytest.mark.parametrize("mask", [0o002, 0o027])
 def test_files_follow_the_umask(tmp_path, mask):
     out = tmp_path / "out"
-    proc = subprocess.run(["sh", "-c", f"umask {mask:03o} && exec {sys.executable} -m scenarios.cli "
+    proc = subprocess.run(["sh", "-c", f"umask {mask:03o} && exec {sys.executable} -m sewfmu "
                            f"run punch_drive --set experiment.revolutions=1 --out {out}"],
                           cwd=REPO, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
@@ -445,7 +445,7 @@ def test_a_file_in_another_encoding_is_named_with_its_line(tmp_path, capsys):
 
 
 def test_a_closed_pipe_ends_quietly(tmp_path):
-    proc = subprocess.run(f"{sys.executable} -m scenarios.cli list | head -1", shell=True,
+    proc = subprocess.run(f"{sys.executable} -m sewfmu list | head -1", shell=True,
                           cwd=REPO, capture_output=True, text=True, timeout=60,
                           executable="/bin/bash")
     assert proc.stdout.strip() == "components (FMUs):"
@@ -454,7 +454,7 @@ def test_a_closed_pipe_ends_quietly(tmp_path):
 
 def test_a_terminal_that_is_not_utf8_gets_escapes_not_a_traceback():
     env = {**os.environ, "PYTHONIOENCODING": "ascii", "LC_ALL": "C"}
-    proc = subprocess.run([sys.executable, "-m", "scenarios.cli", "list"], cwd=REPO, env=env,
+    proc = subprocess.run([sys.executable, "-m", "sewfmu", "list"], cwd=REPO, env=env,
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert "\\u03c6" in proc.stdout and "Traceback" not in proc.stderr
@@ -471,7 +471,7 @@ def test_an_unwritable_output_folder_is_one_line(tmp_path, capsys):
 
 def test_a_long_run_shows_its_progress_on_a_terminal(tmp_path):
     master, slave = pty.openpty()
-    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", "run", "punch_drive",
+    proc = subprocess.Popen([sys.executable, "-m", "sewfmu", "run", "punch_drive",
                              "--set", "experiment.revolutions=120", "--out", str(tmp_path / "o")],
                             cwd=REPO, stdout=subprocess.DEVNULL, stderr=slave)
     os.close(slave)

@@ -5,13 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from components.feed import FeedLinkage, FeedParams
-from components.kinematics import AssemblyError
-from scenarios.analyses.feed import ratio_study
-from scenarios.format import load
-from scenarios.master import run
-from scenarios.runner import summarize
-from scenarios.sampling import sampled
+from sewfmu.components.feed import FeedLinkage, FeedParams
+from sewfmu.components.kinematics import AssemblyError
+from sewfmu.scenarios.analyses.feed import ratio_study
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import summarize
+from sewfmu.scenarios.sampling import sampled
 
 PHI1 = np.radians(np.arange(0.0, 360.0, 0.1))
 

@@ -12,11 +12,11 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
-from components.catalogue import FMUS
-from components.punch_linkage import PunchLinkage
-from scenarios import regression as references
-from scenarios.format import catalogue, load
-from scenarios.runner import export, simulate, variants
+from sewfmu.components.catalogue import FMUS
+from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.scenarios import regression as references
+from sewfmu.scenarios.format import catalogue, load
+from sewfmu.scenarios.runner import export, simulate, variants
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
@@ -113,7 +113,7 @@ _SIDE_BY_SIDE = """
 import sys
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from scenarios.master import FmuInstance, LogCollector, extracted_fmu
+from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
 units = []
 for path in sys.argv[2:]:
     unzip, md = extracted_fmu(Path(path))
@@ -152,7 +152,7 @@ def test_both_versions_of_an_fmu_run_side_by_side_each_its_own_code(fmu_paths, f
 
 
 def test_sewfmu_build_fmi3_writes_into_the_fmi3_folder(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "scenarios.cli", "build", "--fmi", "3",
+    proc = subprocess.run([sys.executable, "-m", "sewfmu", "build", "--fmi", "3",
                            "--dest", str(tmp_path)], capture_output=True, text=True,
                           timeout=300, cwd=REPO)
     assert proc.returncode == 0, proc.stderr
@@ -163,7 +163,7 @@ def test_sewfmu_build_fmi3_writes_into_the_fmi3_folder(tmp_path):
 
 @pytest.mark.parametrize("value", ["4", "true", "2.5", "\"3\""])
 def test_another_fmi_version_is_one_clear_line(capsys, tmp_path, value):
-    from scenarios.cli import main
+    from sewfmu.scenarios.cli import main
     assert main(["run", "punch_drive", "--set", f"experiment.fmi={value}",
                  "--out", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err.strip()

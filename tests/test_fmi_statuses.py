@@ -14,7 +14,7 @@ import time
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from components.punch_contact import MAX_SEARCH_INTERVALS, PunchContact
+from sewfmu.components.punch_contact import MAX_SEARCH_INTERVALS, PunchContact
 from tests.fmu_host import Host
 
 
@@ -158,7 +158,7 @@ _CYCLES = """
 import gc, json, sys, tracemalloc
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from scenarios.master import FmuInstance, LogCollector, extracted_fmu
+from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
 unzip, md = extracted_fmu(Path(sys.argv[2]))
 log = LogCollector()
 unit = FmuInstance.for_fmu("cycle", unzip, md, log)       # FMI 2.0 or 3.0: one library object

@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.catalogue import FMUS
-from components.punch_linkage import PunchLinkage
-from scenarios.hosts import host_environment
-from scenarios.regression import REFERENCE_DIR, read_options
+from sewfmu.components.catalogue import FMUS
+from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.scenarios.hosts import host_environment
+from sewfmu.scenarios.regression import REFERENCE_DIR, read_options
 
 FMUCHECK = os.environ.get("SEWFMU_FMUCHECK", "")
 pytestmark = pytest.mark.skipif(

@@ -13,12 +13,12 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from components.carriage import CarriageDrive
-from components.catalogue import FMUS
-from components.punch_split import PunchBody
-from components.punch_contact import GRAVITY, PunchContactParams
-from components.punch_linkage import PunchLinkage
-from components.shaft import MainShaft
+from sewfmu.components.carriage import CarriageDrive
+from sewfmu.components.catalogue import FMUS
+from sewfmu.components.punch_split import PunchBody
+from sewfmu.components.punch_contact import GRAVITY, PunchContactParams
+from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.components.shaft import MainShaft
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
@@ -257,7 +257,7 @@ def test_instances_in_one_process_are_independent(fmus):
 def test_ensure_built_rebuilds_only_what_is_missing_or_stale(fmu_dir, tmp_path):
     import shutil
 
-    from components.build import ensure_built
+    from sewfmu.components.build import ensure_built
 
     target = tmp_path / "fmus"
     shutil.copytree(fmu_dir, target)
@@ -274,9 +274,9 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
     or the FMU's embedded pythonfmu (without binaries) would serve later builds."""
     import zipfile
 
-    from components.build import build_fmu
-    from scenarios.format import load
-    from scenarios.master import run
+    from sewfmu.components.build import build_fmu
+    from sewfmu.scenarios.format import load
+    from sewfmu.scenarios.master import run
 
     before = list(sys.path)
     sc = load("punch_drive")
@@ -297,9 +297,9 @@ def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_di
     folder = fmu3_dir if fmi == 3 else fmu_dir
     code = (f"import zipfile\n"
             f"from pathlib import Path\n"
-            f"from scenarios.format import load\n"
-            f"from scenarios.master import run\n"
-            f"from components.build import build_fmu\n"
+            f"from sewfmu.scenarios.format import load\n"
+            f"from sewfmu.scenarios.master import run\n"
+            f"from sewfmu.components.build import build_fmu\n"
             f"sc = load('punch_drive'); sc.revolutions = 1\n"
             f"run(sc, {{p.stem: p for p in Path({str(folder)!r}).glob('*.fmu')}})\n"
             f"path = build_fmu('MainShaft', Path({str(tmp_path)!r}), fmi={fmi})\n"

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from components.kinematics import LEFT, RIGHT, AssemblyError, Motion, angle, dyad_rrp, dyad_rrr, \
+from sewfmu.components.kinematics import LEFT, RIGHT, AssemblyError, Motion, angle, dyad_rrp, dyad_rrr, \
     link_angle, point_on_link
-from components.punch_linkage import REQUIRED_DISPLACEMENT, PunchLinkage, PunchLinkageParams
-from scenarios.sampling import sampled
+from sewfmu.components.punch_linkage import REQUIRED_DISPLACEMENT, PunchLinkage, PunchLinkageParams
+from sewfmu.scenarios.sampling import sampled
 
 
 def _crank_driven_dyad(t, side):

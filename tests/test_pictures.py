@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from components.feed import FeedLinkage
-from components.punch_linkage import PunchLinkage
-from components.takeup import TakeupLinkage
-from scenarios.animations import FRAMES, animate
-from scenarios.cli import main
-from scenarios.format import load
-from scenarios.runner import simulate
+from sewfmu.components.feed import FeedLinkage
+from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.components.takeup import TakeupLinkage
+from sewfmu.scenarios.animations import FRAMES, animate
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.runner import simulate
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 needs_chromium = pytest.mark.skipif(

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from components.parameters import ParameterError
-from components.punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
+from sewfmu.components.parameters import ParameterError
+from sewfmu.components.punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
 
 
 def _scipy_free_flight(p, y0, v0, x, h):

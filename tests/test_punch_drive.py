@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from components.build import current_version
-from components.parameters import parameter_info
-from components.punch_contact import PunchContactParams
-from scenarios import punch_monolithic
-from scenarios.cli import main
-from scenarios.format import load, resolve
-from scenarios.master import run
-from scenarios.runner import monolithic_summary, run_scenario, summarize
+from sewfmu.components.build import current_version
+from sewfmu.components.parameters import parameter_info
+from sewfmu.components.punch_contact import PunchContactParams
+from sewfmu.scenarios import punch_monolithic
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import load, resolve
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import monolithic_summary, run_scenario, summarize
 
 
 @pytest.fixture(scope="module")

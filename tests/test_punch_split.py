@@ -6,15 +6,15 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.divergence import Diverged
+from sewfmu.scenarios.divergence import Diverged
 
-from components.punch_contact import PunchContact, PunchContactParams
-from components.punch_split import Fabric, FabricParams, PunchBody
-from scenarios import coupling
-from scenarios.coupling import IterativeMaster
-from scenarios.format import load
-from scenarios.master import run
-from scenarios.runner import monolithic_summary, summarize
+from sewfmu.components.punch_contact import PunchContact, PunchContactParams
+from sewfmu.components.punch_split import Fabric, FabricParams, PunchBody
+from sewfmu.scenarios import coupling
+from sewfmu.scenarios.coupling import IterativeMaster
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import monolithic_summary, summarize
 
 
 def _split(fmu_paths, master=None, step=None, **settings):
@@ -162,6 +162,6 @@ def test_the_body_alone_moves_as_the_punch_without_the_fabric():
 
 
 def test_gauss_seidel_refuses_a_feedback_loop(fmu_paths):
-    from scenarios.format import ScenarioError
+    from sewfmu.scenarios.format import ScenarioError
     with pytest.raises(ScenarioError, match="gauss-seidel.*feedback loop of body, fabric"):
         _split(fmu_paths, master="gauss-seidel")

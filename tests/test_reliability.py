@@ -11,11 +11,11 @@ from fmpy.fmi1 import FMICallException
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from components.build import PACKAGE_DIR, build_fmu
-from components.punch_contact import GRAVITY, PunchContact, PunchContactParams
-from scenarios.cli import main
-from scenarios.format import ScenarioError, load
-from scenarios.master import CosimError, JacobiMaster
+from sewfmu.components.build import PACKAGE_DIR, build_fmu
+from sewfmu.components.punch_contact import GRAVITY, PunchContact, PunchContactParams
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.master import CosimError, JacobiMaster
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
@@ -87,7 +87,7 @@ def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
     sc.set_value("experiment.step", 0.5)
     with pytest.raises(ScenarioError, match="outside the range"):
         JacobiMaster(sc, fmu_paths).run()
-    import scenarios.master as master_module
+    import sewfmu.scenarios.master as master_module
     master = JacobiMaster(sc, fmu_paths)
     master_module_check = master_module.check_parameters
     master_module.check_parameters = lambda *args: None

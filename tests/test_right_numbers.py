@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from components.carriage import CarriageModal, CarriageParams
-from scenarios.analyses import RunTooShort
-from scenarios.cli import explain, main
-from scenarios.divergence import DivergenceWatch, Diverged
-from scenarios.format import ScenarioError, load
-from scenarios.master import run
-from scenarios.runner import run_scenario, summarize
+from sewfmu.components.carriage import CarriageModal, CarriageParams
+from sewfmu.scenarios.analyses import RunTooShort
+from sewfmu.scenarios.cli import explain, main
+from sewfmu.scenarios.divergence import DivergenceWatch, Diverged
+from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import run_scenario, summarize
 from tests.fmu_host import Host
 
 
@@ -333,7 +333,7 @@ def test_an_ssp_component_named_as_a_path_is_refused(fmu_paths, tmp_path):
 
 
 def test_zip_bombs_links_and_member_floods_are_refused(tmp_path, monkeypatch):
-    from scenarios import ssp_import
+    from sewfmu.scenarios import ssp_import
 
     monkeypatch.setattr(ssp_import, "MAX_UNPACKED_BYTES", 1 << 20)
     bomb = _ssp_with(tmp_path, {"SystemStructure.ssd": "<x/>", "zeros": b"\0" * (8 << 20)})

@@ -3,9 +3,9 @@ names too) gives the same figures; roles bound to the wrong FMU type, ambiguous 
 analyses and a shaft that is not a MainShaft are errors naming what is wrong."""
 import pytest
 
-from scenarios.cli import main
-from scenarios.format import ScenarioError, load
-from scenarios.runner import run_scenario
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.runner import run_scenario
 
 from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.cli import main
-from scenarios.format import catalogue, load
-from scenarios.runner import export, simulate, summarize
+from sewfmu.scenarios.cli import main
+from sewfmu.scenarios.format import catalogue, load
+from sewfmu.scenarios.runner import export, simulate, summarize
 
 SKIP = ("scenario", "master", "step", "stop_time", "wall_time_s")
 

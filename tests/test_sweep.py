@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from scenarios.format import load
-from scenarios.sweep import POINTS_FILE, grid_points, run_sweep
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, run_sweep
 
 GRID = {"shaft.omega0": [100.0, 250.0], "punch.F30": [0.0, 8.0]}
 

@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from components.kinematics import AssemblyError, point_on_link
-from components.takeup import TakeupLinkage, TakeupParams
-from scenarios.format import load
-from scenarios.master import run
-from scenarios.runner import summarize
-from scenarios.sampling import sampled
-from scenarios.analyses.takeup import path_stroke, tolerance_study
+from sewfmu.components.kinematics import AssemblyError, point_on_link
+from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios.format import load
+from sewfmu.scenarios.master import run
+from sewfmu.scenarios.runner import summarize
+from sewfmu.scenarios.sampling import sampled
+from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 
@@ -125,7 +125,7 @@ def test_takeup_that_cannot_assemble_names_the_crank_angle():
 def test_studies_run_from_the_command_line(tmp_path, capsys):
     import json
 
-    from scenarios.cli import main
+    from sewfmu.scenarios.cli import main
 
     assert main(["run", "takeup_tolerance", "--out", str(tmp_path / "t")]) == 0
     summary = json.loads((tmp_path / "t" / "summary.json").read_text())

@@ -14,9 +14,9 @@ import textwrap
 
 import numpy as np
 
-from components.carriage import CarriageDrive, CarriageModal, CarriageParams
-from components.oscillator import DampedOscillator
-from components.parameters import with_values
+from ...components.carriage import CarriageDrive, CarriageModal, CarriageParams
+from ...components.oscillator import DampedOscillator
+from ...components.parameters import with_values
 
 from ..sampling import sampled
 from . import column, last_revolution, parameters

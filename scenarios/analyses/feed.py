@@ -13,9 +13,9 @@ import textwrap
 
 import numpy as np
 
-from components.feed import FeedLinkage, FeedParams
-from components.kinematics import AssemblyError
-from components.parameters import with_values
+from ...components.feed import FeedLinkage, FeedParams
+from ...components.kinematics import AssemblyError
+from ...components.parameters import with_values
 
 from ..sampling import sampled
 from . import column, last_revolution, parameters

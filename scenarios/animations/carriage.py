@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from components.carriage import CarriageModal, CarriageParams
-from components.parameters import with_values
+from ...components.carriage import CarriageModal, CarriageParams
+from ...components.parameters import with_values
 
 from .. import analyses
 from . import angle_label

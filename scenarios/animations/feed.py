@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from components.feed import FeedLinkage, FeedParams
-from components.parameters import with_values
+from ...components.feed import FeedLinkage, FeedParams
+from ...components.parameters import with_values
 
 from .. import analyses
 from . import angle_label, reach

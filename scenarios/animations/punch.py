@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from components.parameters import with_values
-from components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
+from ...components.parameters import with_values
+from ...components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
 
 from .. import analyses
 from ..analyses.punch import signal

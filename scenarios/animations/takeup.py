@@ -3,8 +3,8 @@ linkage model at the recorded crank angle) and the eye E at its recorded positio
 willow leaf."""
 from __future__ import annotations
 
-from components.parameters import with_values
-from components.takeup import TakeupLinkage, TakeupParams
+from ...components.parameters import with_values
+from ...components.takeup import TakeupLinkage, TakeupParams
 
 from .. import analyses
 from . import angle_label, reach

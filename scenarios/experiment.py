@@ -1,0 +1,56 @@
+"""The experiment's keys, in one table: the scenario file's [experiment], `--set experiment.KEY`,
+the provenance in summary.json, a sweep point's identity and sewfmu's SSP annotation all read
+their keys here, so that a key added once is known everywhere (docs/scenarios.md lists them).
+
+Each key is an attribute of the same name on a Scenario (scenarios/format.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class ExperimentKey:
+    name: str
+    meaning: str
+    default: str            # as the documentation says it
+    example: str            # a TOML value
+    unit: str = ""          # a value may be given with a unit convertible to this one
+    in_ssp: bool = False    # carried by sewfmu's SSP annotation (SSP 1.0 has no place for it)
+
+
+EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
+    ExperimentKey("revolutions", "length of the run in turns of the shaft instance (exactly one "
+                  "of revolutions and stop_time)", "none", "10", "rev"),
+    ExperimentKey("stop_time", "length of the run (exactly one of revolutions and stop_time)",
+                  "none", '0.5, or "500 ms"', "s"),
+    ExperimentKey("shaft", "the MainShaft instance whose turns `revolutions` counts",
+                  "the analysis's shaft, or the only MainShaft", '"shaft"'),
+    ExperimentKey("step", "communication step; the run is a whole number of even steps no "
+                  "longer than it (the adaptive master: its first step)", "required",
+                  '2.5e-4, or "0.25 ms"', "s", in_ssp=True),
+    ExperimentKey("master", "co-simulation algorithm: jacobi, gauss-seidel, iterative "
+                  "(feedback loops, with rollback), adaptive (step size control)", '"jacobi"',
+                  '"gauss-seidel"', in_ssp=True),
+    ExperimentKey("tolerance", "iterative: relative agreement of the exchanged values; "
+                  "adaptive: local error of the exchanged signals relative to their amplitude",
+                  "iterative 1e-6, adaptive 1e-5", "1e-5", in_ssp=True),
+    ExperimentKey("acceleration", "iterative master's acceleration of the passes: aitken, "
+                  "iqn-ils, none", '"aitken"', '"iqn-ils"', in_ssp=True),
+    ExperimentKey("record_every", "keep every n-th communication point (long runs); the last "
+                  "revolution is always kept whole", "1", "10"),
+    ExperimentKey("fmi", "FMI version of sewfmu's FMUs the run uses: 2 or 3", "2", "3"),
+)}
+
+
+def experiment_of(scenario) -> dict:
+    """Every experiment key's value in this scenario (None where not given)."""
+    return {name: getattr(scenario, name) for name in EXPERIMENT_KEYS}
+
+
+def ssp_settings(scenario, step: float) -> dict:
+    """What sewfmu's SSP annotation carries: the step, the master, and the settings the master
+    uses (a tolerance or an acceleration it ignores is left out)."""
+    used = {"step": step, "master": scenario.master, **scenario.master_settings()}
+    return {name: used[name] for name, key in EXPERIMENT_KEYS.items()
+            if key.in_ssp and name in used}

@@ -1,0 +1,16 @@
+"""sewfmu: sewing-machine mechanisms as FMI co-simulation FMUs, and scenarios that connect them.
+
+    import sewfmu
+    r = sewfmu.run("punch_drive", set={"shaft.omega0": 300.0})
+    r.summary["F2_weld_mean"], r.series["time"], r.series["punch.F2"], r.units["punch.F2"]
+
+run, sweep, compare, load, build and show do what the command line's commands of those names
+do (docs/api.md). The models are in sewfmu.components, the master and scenarios in
+sewfmu.scenarios.
+"""
+from ._version import __version__
+from .api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, \
+    show, sweep
+
+__all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
+           "Run", "Sweep", "Scenario", "ScenarioError"]

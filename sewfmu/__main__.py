@@ -1,0 +1,6 @@
+"""`python -m sewfmu`: the command line."""
+import sys
+
+from .scenarios.cli import main
+
+sys.exit(main())

@@ -1,0 +1,268 @@
+"""sewfmu from Python: what the command line does, as functions that return numbers with units.
+
+    import sewfmu
+    r = sewfmu.run("punch_drive", set={"shaft.omega0": 300.0})
+    r.summary["F2_weld_mean"], r.units["F2_weld_mean"]      # key figures, as in summary.json
+    r.series["time"], r.series["punch.F2"]                  # numpy structured array (FMPy's habit)
+
+A scenario is a catalogue name, a path to a TOML file or an SSP archive, or a Scenario from
+`load`. `set` takes what `--set` takes: {"instance.parameter": value, "experiment.key": value},
+a value a number or a string with its unit ("955 rpm", "0.25 ms"). Nothing is written unless
+`out` is given; then the same files as the command line's are written there. Errors are the
+command line's: ScenarioError (a bad scenario or value), CosimError (a run that fails), each
+with one line that says what is wrong. docs/api.md shows every function at work.
+"""
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .scenarios.format import Scenario, ScenarioError, catalogue, load as _load_scenario
+
+__all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
+           "Scenario", "ScenarioError"]
+
+
+def scenarios() -> list[str]:
+    """The names of the catalogue's scenarios."""
+    return sorted(catalogue())
+
+
+def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
+    """A scenario (catalogue name, TOML or SSP path) with the `set` overrides applied; a Scenario
+    given is copied, never changed."""
+    if isinstance(scenario, Scenario):
+        loaded = scenario.copy()
+    elif isinstance(scenario, (str, Path)):
+        loaded = _load_scenario(str(scenario))
+    else:
+        raise ScenarioError(f"a scenario is a catalogue name, a path or a Scenario, got "
+                            f"{type(scenario).__name__}")
+    if set is not None and not isinstance(set, Mapping):
+        raise ScenarioError(f"set: expected a dict of 'instance.parameter': value, got "
+                            f"{type(set).__name__}")
+    for target, value in (set or {}).items():
+        loaded.set_value(str(target), value, origin="set")
+    return loaded
+
+
+def show(scenario: str) -> str:
+    """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`)."""
+    from .scenarios.format import resolve
+
+    path = resolve(scenario)
+    if path.suffix.lower() != ".toml":
+        raise ScenarioError(f"{scenario}: only TOML scenarios can be shown (an SSP archive is "
+                            f"read by sewfmu, not written back as TOML)")
+    return path.read_text(encoding="utf-8-sig")
+
+
+@dataclass
+class Run:
+    """One co-simulation: key figures, their units, the recorded time series.
+
+    summary: what summary.json holds (key figures, master, step, provenance...).
+    series: numpy structured array, a `time` field and one `instance.variable` field per
+    recorded output; units: the unit of every column and key figure ("" for none)."""
+    name: str
+    summary: dict
+    series: Any
+    units: dict[str, str]
+    out: Path | None = None
+    runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
+
+    @property
+    def figures(self) -> dict:
+        """The key figures alone (what `sewfmu run` prints)."""
+        return {k: v for k, v in self.summary.items()
+                if k not in ("scenario", "master", "step", "stop_time", "provenance", "units",
+                             "runs", "compare")}
+
+    @property
+    def provenance(self) -> dict:
+        return self.summary.get("provenance", {})
+
+    def to_pandas(self):
+        """The time series as a pandas DataFrame indexed by time (pandas must be installed)."""
+        return _frame(self.series, index="time")
+
+    def __repr__(self) -> str:
+        if self.runs:
+            return f"<sewfmu.Run {self.name}: {len(self.runs)} runs {list(self.runs)}>"
+        shown = ", ".join(f"{k}={_short(v)}" for k, v in list(self.figures.items())[:4])
+        return f"<sewfmu.Run {self.name}: {len(self.series)} samples; {shown}>"
+
+
+def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
+        out: str | Path | None = None, plot: bool = False, animate: bool = False,
+        report: bool = False, fmu_dir: str | Path | None = None) -> Run:
+    """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
+    as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
+    value (its summary is summary.json's, the figures per run under "runs")."""
+    from .scenarios.runner import run_variants, summary_of_runs, write_outputs
+
+    sc = load(scenario, set)
+    if (plot or animate or report) and out is None:
+        raise ScenarioError("plot, animate and report are files: give out= a folder for them")
+    runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None)
+    if out is not None:
+        write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
+    out = Path(out) if out is not None else None
+    each = {label: _run_of(label or sc.name, result, own, out) for label, result, own in runs}
+    if not sc.compare:
+        return each[""]
+    summary = summary_of_runs(sc, runs)
+    return Run(sc.name, summary, None, {}, out, runs=each)
+
+
+def _run_of(name: str, result, summary: dict, out: Path | None) -> Run:
+    import numpy as np
+
+    names = list(result.columns)
+    series = np.empty(len(result.time), dtype=[("time", "f8")] + [(n, "f8") for n in names])
+    series["time"] = result.time
+    for n in names:
+        series[n] = result.columns[n]
+    units = {"time": "s", **{n: result.units.get(n, "") for n in names},
+             **summary.get("units", {})}
+    return Run(name, summary, series, units, out)
+
+
+@dataclass
+class Sweep:
+    """A sweep's points: `rows` as in sweep.csv (the swept values, status, key figures, error);
+    `table` the same as a numpy structured array (numbers; NaN where a point failed)."""
+    name: str
+    swept: list[str]
+    rows: list[dict]
+    units: dict[str, str]
+    out: Path | None = None
+
+    @property
+    def failed(self) -> list[dict]:
+        return [r for r in self.rows if r["status"] != "ok"]
+
+    @property
+    def table(self):
+        import numpy as np
+
+        columns = self.swept + [k for k in self.units if k not in self.swept]
+        data = np.full(len(self.rows), np.nan, dtype=[(c, "f8") for c in columns])
+        for i, row in enumerate(self.rows):
+            for c in columns:
+                value = row.get(c)
+                if isinstance(value, (int, float)):
+                    data[c][i] = value
+        return data
+
+    def to_pandas(self):
+        """The rows as a pandas DataFrame (pandas must be installed)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows).drop(columns=["key"], errors="ignore")
+
+    def __repr__(self) -> str:
+        return (f"<sewfmu.Sweep {self.name}: {len(self.rows)} points over "
+                f"{', '.join(self.swept)}; {len(self.failed)} failed>")
+
+
+def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
+          set: Mapping[str, Any] | None = None, *, workers: int | None = None,
+          scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
+          report: bool = False, progress: bool = False) -> Sweep:
+    """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
+    ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
+    writes (and an interrupted sweep into the same folder resumes)."""
+    from .scenarios.sweep import points_of, run_sweep, sweep_pictures
+
+    sc = load(scenario, set)
+    if grid is not None and not isinstance(grid, Mapping):
+        raise ScenarioError(f"grid: expected a dict of 'instance.parameter': [values], got "
+                            f"{type(grid).__name__}")
+    grid = {k: list(v) if isinstance(v, (list, tuple, range)) else [v]
+            for k, v in (grid or {}).items()}
+    points = points_of(sc, grid)
+    swept = [name for name, _ in points[0].values]
+    if (plot or report) and out is None:
+        raise ScenarioError("plot and report are files: give out= a folder for them")
+    with tempfile.TemporaryDirectory(prefix="sewfmu_sweep_") as scratch:
+        folder = Path(out) if out is not None else Path(scratch)
+        rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
+                         progress=progress)
+        if out is not None and (plot or report):
+            sweep_pictures(sc, rows, swept, folder, report=report)
+    units = {target: _unit_of(sc, target) for target in swept}
+    units.update({"stop_time": "s", "wall_time_s": "s", **_figure_units(sc)})
+    units = {k: u for k, u in units.items() if any(k in r for r in rows)}
+    return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
+
+
+def _unit_of(sc: Scenario, target: str) -> str:
+    """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
+    from .components.catalogue import parameter_units
+
+    inst, _, key = target.partition(".")
+    if inst == "experiment":
+        return {"step": "s", "stop_time": "s", "revolutions": "rev"}.get(key, "")
+    fmu = sc.instances[inst].fmu
+    return "" if fmu in sc.fmu_files else parameter_units(fmu).get(key, "")
+
+
+def _figure_units(sc: Scenario) -> dict[str, str]:
+    from .scenarios import analyses
+
+    if not sc.analysis:
+        return {}
+    return dict(analyses.module(sc.analysis).FIGURES)
+
+
+def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
+            rtol: float | None = None) -> dict[str, dict]:
+    """The co-simulation beside the monolithic solution of the same physics (the punch drive's
+    scenarios): {figure: {"cosim", "monolithic", "difference", "unit"}}; with `rtol` also the
+    monolithic solver at that tolerance ("monolithic_rtol", "rtol_error")."""
+    from .scenarios.runner import compare as compare_rows
+
+    sc = load(scenario, set)
+    units = {**_figure_units(sc), "wall_time_s": "s"}
+    out = {}
+    for row in compare_rows(sc, rtol=rtol):
+        if rtol is None:
+            key, a, b, d = row
+            out[key] = {"cosim": a, "monolithic": b, "difference": d}
+        else:
+            key, a, c, b, ea, ec = row
+            out[key] = {"cosim": a, "monolithic": b, "difference": ea, "monolithic_rtol": c,
+                        "rtol_error": ec}
+        out[key]["unit"] = units.get(key, "")
+    return out
+
+
+def build(fmi: int = 2, dest: str | Path | None = None,
+          names: list[str] | None = None) -> list[Path]:
+    """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
+    fmus/fmi3/); return their paths."""
+    from .components.build import build_fmu, default_fmu_dir
+    from .components.catalogue import FMUS
+    from .scenarios.format import did_you_mean
+
+    if isinstance(fmi, bool) or fmi not in (2, 3):
+        raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")
+    for name in names or []:
+        if name not in FMUS:
+            raise ScenarioError(f"unknown FMU {name!r}{did_you_mean(name, FMUS)} "
+                                f"(known: {', '.join(FMUS)})")
+    folder = default_fmu_dir(fmi, Path(dest) if dest else None)
+    return [build_fmu(name, folder, fmi=fmi) for name in (names or list(FMUS))]
+
+
+def _frame(series, index: str):
+    import pandas as pd
+
+    return pd.DataFrame(series).set_index(index)
+
+
+def _short(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
