@@ -332,8 +332,7 @@ def explain(err: Exception, command: str) -> str:
         extra = EXTRAS.get(err.name.split(".")[0])
         if extra:
             return (f"`sewfmu {command}` needs the optional package {err.name.split('.')[0]}: "
-                    f"pip install \"sewfmu[{extra}]\" (in a checkout: pip install -e "
-                    f"\".[{extra}]\")")
+                    f"{install_command(extra)}")
     if isinstance(err, OSError) and err.strerror:
         where = f"{err.filename}: " if err.filename else ""
         return f"{where}{err.strerror}"
@@ -346,7 +345,31 @@ def explain(err: Exception, command: str) -> str:
 
 # the optional packages and the extra of pyproject.toml that installs each
 EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
-          "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop"}
+          "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
+          "pandas": "pandas"}
+
+
+def install_command(extra: str) -> str:
+    """The pip command that adds an extra to this sewfmu, from where it was installed: its
+    checkout (editable or not), its wheel, or the package index."""
+    import json
+    from importlib import metadata
+    from urllib.parse import unquote, urlparse
+
+    # (a build's sewfmu.egg-info in the working folder is a distribution too, without origin)
+    found = [d.read_text("direct_url.json") for d in metadata.distributions(name="sewfmu")]
+    try:
+        origin = json.loads(next((t for t in found if t), "{}")) if found else None
+    except ValueError:
+        origin = {}
+    if origin is None:                    # not installed: running from a checkout
+        return f"pip install -e \".[{extra}]\" in sewfmu's checkout"
+    url = origin.get("url", "")
+    if not url.startswith("file://"):
+        return f"pip install \"sewfmu[{extra}]\""
+    where = unquote(urlparse(url).path)
+    editable = "-e " if origin.get("dir_info", {}).get("editable") else ""
+    return f"pip install {editable}\"{where}[{extra}]\""
 
 
 def _positive_number(text: str) -> float:

@@ -198,6 +198,13 @@ class Scenario:
             raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source}"
                                 f"{did_you_mean(inst, self.instances)} "
                                 f"(instances: {', '.join(self.instances)})")
+        fmu = self.instances[inst].fmu
+        if fmu in FMUS and fmu not in self.fmu_files:   # an FMU from elsewhere: its own check
+            known = parameter_units(fmu)
+            if key not in known:
+                raise ScenarioError(f"{origin} {target}: {inst} ({fmu}) has no parameter "
+                                    f"{key!r}{did_you_mean(key, known)} "
+                                    f"(has: {', '.join(known)})")
         if isinstance(value, str):          # a value with its unit: "110 deg", "955 rpm"
             value = self._in_declared_unit(inst, key, value, f"{origin} {target}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -262,13 +269,8 @@ class Scenario:
             raise ScenarioError(f"{origin} experiment.{key}: unknown experiment setting"
                                 f"{did_you_mean(key, EXPERIMENT_KEYS)} "
                                 f"({', '.join(EXPERIMENT_KEYS)})")
-        if isinstance(value, str) and key in ("step", "stop_time"):     # "0.25 ms", "2 s"
-            from ..components.units import UnitError, in_unit
-            try:
-                value = in_unit(value, "s")
-            except UnitError as err:
-                raise ScenarioError(f"{origin} experiment.{key}: {err}") from None
-        number = _positive(value, f"{origin} experiment.{key}")
+        where = f"{origin} experiment.{key}"
+        number = _seconds(value, where) if key in ("step", "stop_time") else _positive(value, where)
         setattr(self, key, number)
         if key == "stop_time":
             self.revolutions = None
@@ -328,6 +330,17 @@ def _positive(value: Any, where: str) -> float:
     if not math.isfinite(number) or number <= 0:
         raise ScenarioError(f"{where}: must be a positive finite number, got {_short(value)}")
     return number
+
+
+def _seconds(value: Any, where: str) -> float:
+    """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
+    if isinstance(value, str):
+        from ..components.units import UnitError, in_unit
+        try:
+            value = in_unit(value, "s")
+        except UnitError as err:
+            raise ScenarioError(f"{where}: {err}") from None
+    return _positive(value, where)
 
 
 def parse_value(text: str, where: str) -> Any:
@@ -410,9 +423,16 @@ def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
     return value
 
 
+# the keys of a scenario file besides the experiment's (docs/scenarios.md describes each)
+TOP_KEYS = ("description", "analysis", "roles", "connections", "record", "experiment",
+            "instances", "compare", "sweep")
+INSTANCE_KEYS = ("fmu", "parameters")
+COMPARE_KEYS = ("parameter", "values")
+SWEEP_KEYS = ("grid", "points")
+
+
 def from_dict(data: dict, name: str, source: str) -> Scenario:
-    known_top = {"description", "analysis", "roles", "connections", "record", "experiment",
-                 "instances", "compare", "sweep"}
+    known_top = TOP_KEYS
     for key in data:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r}{did_you_mean(key, known_top)} "
@@ -447,9 +467,9 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         if not isinstance(spec, dict) or not isinstance(spec.get("fmu"), str):
             raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
         for key in spec:
-            if key not in ("fmu", "parameters"):
+            if key not in INSTANCE_KEYS:
                 raise ScenarioError(f"{where}: unknown key {key!r}"
-                                    f"{did_you_mean(key, ('fmu', 'parameters'))} (fmu, parameters)")
+                                    f"{did_you_mean(key, INSTANCE_KEYS)} (fmu, parameters)")
         params = spec.get("parameters", {})
         if not isinstance(params, dict):
             raise ScenarioError(f"{where}.parameters must be a table")
@@ -461,9 +481,9 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     scenario = Scenario(
         name=name, source=source, description=str(data.get("description", "")),
         analysis=data.get("analysis"), instances=instances, connections=[],
-        record=data.get("record"), step=_positive(exp["step"], f"{source}: experiment.step"),
+        record=data.get("record"), step=_seconds(exp["step"], f"{source}: experiment.step"),
         master=master,
-        stop_time=(_positive(exp["stop_time"], f"{source}: experiment.stop_time")
+        stop_time=(_seconds(exp["stop_time"], f"{source}: experiment.stop_time")
                    if "stop_time" in exp else None),
         revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
@@ -530,7 +550,7 @@ def _check_compare(scenario: Scenario, source: str) -> None:
             or not isinstance(cmp.get("values"), list) or not cmp["values"]:
         raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
                             f"a non-empty list values = [...]")
-    unknown = set(cmp) - {"parameter", "values"}
+    unknown = set(cmp) - set(COMPARE_KEYS)
     if unknown:
         raise ScenarioError(f"{source}: unknown key compare.{sorted(unknown)[0]} "
                             f"(known: parameter, values)")
@@ -564,7 +584,7 @@ def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict
 
 def _check_sweep(sweep: Any, source: str) -> None:
     """[sweep] grid = { "instance.parameter" = [values] }, or [[sweep.points]] tables."""
-    if not isinstance(sweep, dict) or set(sweep) - {"grid", "points"}:
+    if not isinstance(sweep, dict) or set(sweep) - set(SWEEP_KEYS):
         raise ScenarioError(f"{source}: [sweep] takes grid = {{ \"instance.parameter\" = [...] }} "
                             f"or [[sweep.points]]")
     grid = sweep.get("grid", {})

@@ -50,3 +50,70 @@ def test_no_file_points_outside_the_repository():
                 and not {".venv", ".git", "fmus", "results"} & set(path.relative_to(REPO).parts)):
             text = path.read_text(encoding="utf-8", errors="replace")
             assert "../shared" not in text and "MECHANISMS.md" not in text, path
+
+
+def python_blocks(page: Path) -> list[str]:
+    return re.findall(r"^```python\n(.*?)^```", page.read_text(encoding="utf-8"), re.M | re.S)
+
+
+def test_every_example_of_the_api_page_runs(tmp_path, monkeypatch, fmu_paths):
+    """docs/api.md as a user reads it: its examples, in order, in one namespace, in an empty
+    folder; each checks what it claims (asserts in the examples)."""
+    blocks = python_blocks(REPO / "docs" / "api.md")
+    assert len(blocks) >= 6
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for number, block in enumerate(blocks, 1):
+        try:
+            exec(compile(block, f"docs/api.md example {number}", "exec"), namespace)
+        except Exception as err:
+            raise AssertionError(f"docs/api.md example {number} fails: {err!r}\n{block}") from err
+
+
+def test_the_example_notebook_runs(tmp_path, fmu_paths):
+    """examples/punch_drive.ipynb executed as Jupyter would (nbclient, a Python kernel), in an
+    empty folder: a run, a sweep and their plots, with the checks in its last cell."""
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    notebook = nbformat.read(REPO / "examples" / "punch_drive.ipynb", as_version=4)
+    nbclient.NotebookClient(notebook, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    images = [o for cell in notebook.cells for o in cell.get("outputs", [])
+              if "image/png" in o.get("data", {})]
+    assert len(images) == 2
+
+
+def _documented_keys(section: str) -> set[str]:
+    text = (REPO / "docs" / "scenarios.md").read_text(encoding="utf-8")
+    part = text.split(f"## {section}\n", 1)[1].split("\n## ", 1)[0]
+    return set(re.findall(r"^\| `([a-z_]+)` \|", part, re.M))
+
+
+def test_every_key_of_the_scenario_format_is_documented():
+    """docs/scenarios.md has a row (meaning, default, example) for every key the format reads,
+    and none it does not."""
+    from sewfmu.scenarios.experiment import EXPERIMENT_KEYS
+    from sewfmu.scenarios.format import COMPARE_KEYS, INSTANCE_KEYS, SWEEP_KEYS, TOP_KEYS
+
+    assert _documented_keys("The top level") == set(TOP_KEYS)
+    assert _documented_keys("[experiment]") == set(EXPERIMENT_KEYS)
+    assert _documented_keys("[instances.NAME]") == set(INSTANCE_KEYS)
+    assert _documented_keys("[compare]") == set(COMPARE_KEYS)
+    assert _documented_keys("[sweep]") == set(SWEEP_KEYS)
+
+
+def test_the_scenario_pages_example_runs_with_its_units(tmp_path, fmu_paths):
+    """The example of docs/scenarios.md, with values in rpm, ms and N/mm, runs as the same
+    scenario written in SI units."""
+    import sewfmu
+
+    text = (REPO / "docs" / "scenarios.md").read_text(encoding="utf-8")
+    example = re.search(r"^```toml\n(.*?)^```", text, re.M | re.S).group(1)
+    (tmp_path / "example.toml").write_text(example)
+    si = (example.replace('"955 rpm"', repr(955 * 2 * math.pi / 60))
+          .replace('"0.25 ms"', "0.25e-3").replace('"150 N/mm"', "150e3"))
+    (tmp_path / "si.toml").write_text(si)
+    with_units = sewfmu.run(tmp_path / "example.toml")
+    plain = sewfmu.run(tmp_path / "si.toml")
+    assert with_units.figures["F2_peak"] == plain.figures["F2_peak"]
+    assert with_units.units["F2_peak"] == "N"

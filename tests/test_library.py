@@ -105,3 +105,57 @@ def test_references_work_from_a_plain_install_in_any_folder(plain_install, tmp_p
     assert proc.returncode == 0, proc.stderr[-2000:]
     from sewfmu.components.catalogue import FMUS
     assert f"all {len(FMUS)} FMI 2.0 FMUs match their references" in proc.stdout
+
+
+@pytest.mark.parametrize("name", sewfmu.scenarios())
+def test_show_prints_a_scenario_that_loads_back_unchanged(name, tmp_path):
+    """`sewfmu show NAME > mine.toml`: the file is the same scenario (instances, parameters,
+    connections, experiment, compare, sweep), under the new file's name."""
+    from sewfmu.scenarios.cli import main
+    from sewfmu.scenarios.experiment import experiment_of
+
+    out = tmp_path / "mine.toml"
+    import contextlib
+    import io
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main(["show", name]) == 0
+    out.write_text(buffer.getvalue(), encoding="utf-8")
+    mine, theirs = sewfmu.load(out), sewfmu.load(name)
+    assert mine.name == "mine"
+    for attribute in ("description", "analysis", "roles", "record", "compare", "sweep"):
+        assert getattr(mine, attribute) == getattr(theirs, attribute), attribute
+    assert {n: (i.fmu, i.parameters) for n, i in mine.instances.items()} == \
+        {n: (i.fmu, i.parameters) for n, i in theirs.instances.items()}
+    assert [str(c) for c in mine.connections] == [str(c) for c in theirs.connections]
+    assert experiment_of(mine) == experiment_of(theirs)
+
+
+def test_show_refuses_what_it_cannot_show(tmp_path):
+    with pytest.raises(sewfmu.ScenarioError, match="did you mean 'punch_drive'"):
+        sewfmu.show("punch_drve")
+
+
+def test_the_api_refuses_bad_arguments_in_one_line():
+    with pytest.raises(sewfmu.ScenarioError, match="set: expected a dict"):
+        sewfmu.load("punch_drive", set=["shaft.omega0=3"])
+    with pytest.raises(sewfmu.ScenarioError, match="did you mean 'omega0'"):
+        sewfmu.load("punch_drive", set={"shaft.omega": 3.0})
+    with pytest.raises(sewfmu.ScenarioError, match="give out= a folder"):
+        sewfmu.run("punch_drive", plot=True)
+    with pytest.raises(sewfmu.ScenarioError, match="a catalogue name, a path or a Scenario"):
+        sewfmu.run(42)
+    with pytest.raises(sewfmu.ScenarioError, match="FMI version"):
+        sewfmu.build(fmi=4)
+    with pytest.raises(sewfmu.ScenarioError, match="did you mean 'MainShaft'"):
+        sewfmu.build(names=["MainShat"])
+
+
+def test_a_loaded_scenario_is_not_changed_by_running_it_with_set(fmu_paths):
+    sc = sewfmu.load("punch_drive", set={"experiment.revolutions": 2})
+    r = sewfmu.run(sc, set={"shaft.omega0": "1910 rpm"})
+    assert sc.instances["shaft"].parameters["omega0"] == 100.0
+    assert r.provenance["instances"]["shaft"]["parameters"]["omega0"]["value"] == \
+        pytest.approx(200.0, rel=1e-3)
+    frame = pytest.importorskip("pandas") and r.to_pandas()
+    assert frame.index.name == "time" and list(frame["punch.F2"]) == list(r.series["punch.F2"])
