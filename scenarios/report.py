@@ -24,14 +24,25 @@ p.lead { color: #555; margin-top: 0; }
 .scroll { overflow-x: auto; }
 table { border-collapse: collapse; margin: 0.4em 0 1em; font-size: 0.93em; }
 th, td { padding: 3px 10px; border-bottom: 1px solid #e4e4e4; text-align: left;
-         vertical-align: top; }
-td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+         vertical-align: top; overflow-wrap: anywhere; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.set td { font-weight: 600; }
 figure { margin: 0.5em 0 1.2em; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e4e4e4; background: white; }
 figcaption { color: #555; font-size: 0.9em; }
 .pictures { display: flex; flex-wrap: wrap; gap: 16px; }
-.pictures figure { flex: 1 1 360px; }
+.pictures figure { flex: 1 1 360px; min-width: 0; }
+/* a phone: each row of a table of three columns or more becomes a card, one "column: value"
+   line per cell, so that no value hides beyond the screen's edge */
+@media (max-width: 640px) {
+  main { padding: 8px 10px 32px; }
+  table.cards, table.cards tbody, table.cards tr, table.cards td { display: block; }
+  table.cards { width: 100%; }
+  table.cards thead { display: none; }
+  table.cards tr { border-bottom: 1px solid #d0d0d0; padding: 4px 0; }
+  table.cards td { border: none; padding: 1px 4px; text-align: left; }
+  table.cards td::before { content: attr(data-label) ": "; color: #666; font-weight: normal; }
+}
 """
 
 
@@ -41,15 +52,25 @@ class Section:
     blocks: list[str] = field(default_factory=list)     # HTML fragments
 
     def table(self, header: list[str], rows: list[list], numeric: set[int] = frozenset(),
-              marked: list[bool] | None = None) -> None:
+              marked: list[bool] | None = None, keep: int = 1) -> None:
+        """A table; one wider than a wide screen is split into tables of fewer columns, each
+        repeating the first `keep` columns (which say what a row is)."""
+        for columns in _column_groups(header, rows, keep):
+            self._table([header[j] for j in columns], [[row[j] for j in columns] for row in rows],
+                        {i for i, j in enumerate(columns) if j in numeric}, marked)
+
+    def _table(self, header: list[str], rows: list[list], numeric: set[int],
+               marked: list[bool] | None) -> None:
         head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+        labels = [html.escape(h, quote=True) for h in header]
         body = []
         for k, row in enumerate(rows):
-            cells = "".join(f'<td class="num">{html.escape(_text(v))}</td>' if j in numeric
-                            else f"<td>{html.escape(_text(v))}</td>" for j, v in enumerate(row))
+            cells = "".join(f'<td data-label="{labels[j]}"{NUMERIC if j in numeric else ""}>'
+                            f"{html.escape(_text(v))}</td>" for j, v in enumerate(row))
             cls = ' class="set"' if marked and marked[k] else ""
             body.append(f"<tr{cls}>{cells}</tr>")
-        self.blocks.append(f'<div class="scroll"><table><thead><tr>{head}</tr></thead>'
+        cards = ' class="cards"' if len(header) >= 3 else ""
+        self.blocks.append(f'<div class="scroll"><table{cards}><thead><tr>{head}</tr></thead>'
                            f'<tbody>{"".join(body)}</tbody></table></div>')
 
     def pictures(self, items: list[tuple[str, Path]]) -> None:
@@ -65,6 +86,29 @@ class Section:
 
     def note(self, text: str) -> None:
         self.blocks.append(f"<p>{html.escape(text)}</p>")
+
+
+NUMERIC = ' class="num"'
+
+# what a table may take of a wide screen's line (main is 1100 px wide), and the width of a
+# character of the table's font with a cell's padding, estimated on the safe side
+WIDE_SCREEN_PX = 1000
+CHAR_PX, PADDING_PX = 8.5, 22
+
+
+def _column_groups(header: list[str], rows: list[list], keep: int) -> list[list[int]]:
+    """Indices of the columns of each table a wide table is split into."""
+    widths = [PADDING_PX + CHAR_PX * max(len(_text(v)) for v in [h] + [r[j] for r in rows])
+              for j, h in enumerate(header)]
+    keep = min(keep, len(header))
+    groups, current = [], list(range(keep))
+    for j in range(keep, len(header)):
+        if len(current) > keep and sum(widths[i] for i in current) + widths[j] > WIDE_SCREEN_PX:
+            groups.append(current)
+            current = list(range(keep))
+        current.append(j)
+    groups.append(current)
+    return groups
 
 
 def _text(value) -> str:
@@ -105,6 +149,13 @@ def unit_of(figure: str) -> str:
     return ""
 
 
+def figure_units(scenario) -> dict[str, str]:
+    """The units of the key figures of the scenario's analysis (each declares them)."""
+    from . import analyses
+
+    return dict(analyses.module(scenario.analysis).FIGURES) if scenario.analysis else {}
+
+
 def provenance_sections(provenance: dict) -> list[Section]:
     """What was run: the scenario, master, step, versions; every parameter (the scenario's own
     values in bold)."""
@@ -127,10 +178,10 @@ def provenance_sections(provenance: dict) -> list[Section]:
     return [run, params]
 
 
-def comparison_section(rows: list[tuple], title: str) -> Section:
+def comparison_section(rows: list[tuple], title: str, units: dict[str, str]) -> Section:
     section = Section(title)
     section.table(["figure", "co-simulation", "monolithic", "difference", "unit"],
-                  [[k, a, b, d, unit_of(k)] for k, a, b, d in rows], numeric={1, 2, 3})
+                  [[k, a, b, d, units.get(k, "")] for k, a, b, d in rows], numeric={1, 2, 3})
     return section
 
 
@@ -144,14 +195,15 @@ def run_report(path: Path, scenario, runs: list[tuple], pictures: list[tuple[str
     keys = [k for k, v in runs[0][2].items()
             if k not in ("scenario", "master", "provenance") and not isinstance(v, (dict, list))]
     figures = Section("Key figures" + (" (last revolution)" if scenario.analysis else ""))
+    units = runs[0][2].get("units", {})
     figures.table(["figure", *(labels if labels != [""] else ["value"]), "unit"],
-                  [[k, *(own.get(k) for _, _, own in runs), unit_of(k)] for k in keys],
+                  [[k, *(own.get(k) for _, _, own in runs), units.get(k, "")] for k in keys],
                   numeric=set(range(1, len(runs) + 1)))
     sections.append(figures)
     for label, rows in against_monolithic.items():
         sections.append(comparison_section(
             rows, "Against the monolithic solution (one ODE, DOP853, rtol 1e-8)"
-                  + (f", {label}" if label else "")))
+                  + (f", {label}" if label else ""), units))
     if pictures:
         shown = Section("Pictures")
         shown.pictures(pictures)
@@ -193,10 +245,12 @@ def sweep_report(path: Path, scenario, rows: list[dict], swept: list[str],
     table = Section("Points")
     columns = ["index", *swept, "status"]
     columns += [k for k in rows[0] if k not in columns and k not in ("key", "error")]
-    table.table([c if c in swept or c in ("index", "status") or not unit_of(c)
-                 else f"{c} [{unit_of(c)}]" for c in columns] + ["error"],
+    units = {"stop_time": "s", "wall_time_s": "s", **figure_units(scenario)}
+    table.table([f"{c} [{units[c]}]" if units.get(c) and c not in swept else c
+                 for c in columns] + ["error"],
                 [[r.get(c) for c in columns] + [r.get("error", "")] for r in rows],
-                numeric=set(range(len(columns))) - {columns.index("status")})
+                numeric=set(range(len(columns))) - {columns.index("status")},
+                keep=1 + len(swept))
     sections = [what, table]
     if picture is not None and Path(picture).exists():
         shown = Section("Pictures")

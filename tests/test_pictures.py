@@ -167,3 +167,59 @@ def test_study_and_sweep_reports(tmp_path):
     _self_contained(page)
     assert "shaft.omega0" in page and "F2_weld_mean [N]" in page
     assert page.count("data:image/png;base64,") == 1
+
+
+# Lays the report out in a frame of the given width (headless Chromium's window is at least
+# 500 px wide, so a phone's 390 px is a frame inside it) and lists every table cell that does not
+# lie wholly on the screen or inside the box that holds its table (a part scrolled out of sight).
+_PROBE = """<!DOCTYPE html><html><body style="margin:0">
+<iframe id="frame" style="border:0" width="{width}" height="3000" srcdoc="{page}"></iframe>
+<script>
+document.getElementById('frame').addEventListener('load', () => {{
+  const doc = document.getElementById('frame').contentDocument;
+  const width = doc.documentElement.clientWidth, hidden = [];
+  for (const cell of doc.querySelectorAll('td, th')) {{
+    const r = cell.getBoundingClientRect(), box = cell.closest('.scroll').getBoundingClientRect();
+    if (r.width === 0 && r.height === 0) continue;           // a header row hidden on purpose
+    if (r.left < -0.5 || r.right > Math.min(width, box.right) + 0.5)
+      hidden.push(cell.textContent.slice(0, 30));
+  }}
+  const page = doc.documentElement.scrollWidth > width ? 'page scrolls sideways' : '';
+  document.body.setAttribute('data-hidden', JSON.stringify({{width, page, hidden}}));
+}});
+</script></body></html>"""
+
+
+def _hidden_cells(page, width: int, tmp_path) -> dict:
+    import html as markup
+
+    probe = tmp_path / f"probe_{width}_{page.parent.name}.html"
+    probe.write_text(_PROBE.format(width=width, page=markup.escape(
+        page.read_text(encoding="utf-8"), quote=True)), encoding="utf-8")
+    dom = _chromium(f"--window-size={max(width, 500) + 40},2000", "--virtual-time-budget=5000",
+                    "--dump-dom", probe.as_uri()).stdout
+    found = re.search(r'data-hidden="([^"]*)"', dom)
+    assert found, dom[-2000:]
+    return json.loads(markup.unescape(found.group(1)))
+
+
+@needs_chromium
+def test_every_value_of_a_report_is_visible_on_a_phone_and_a_wide_screen(tmp_path):
+    """390 px (a phone) and 1280 px: no table cell hides beyond the screen or in a box that
+    scrolls sideways, for a run with three overlaid runs and a sweep over three parameters (16
+    columns: the F2 figures came last and were hidden at 1280 px)."""
+    run = tmp_path / "run"
+    assert main(["run", "punch_speed", "--set", "experiment.revolutions=2", "--report",
+                 "--out", str(run)]) == 0
+    sweep = tmp_path / "sweep"
+    assert main(["sweep", "punch_drive", "--grid", "shaft.omega0=100,300", "--grid",
+                 "punch.F30=5,10", "--grid", "punch.c2=1e5,2e5", "--set",
+                 "experiment.revolutions=2", "--quiet", "--workers", "2", "--report",
+                 "--out", str(sweep)]) == 0
+    for page in (run / "report.html", sweep / "report.html"):
+        for width in (390, 1280):
+            seen = _hidden_cells(page, width, tmp_path)
+            assert seen["width"] == width
+            assert not seen["page"] and not seen["hidden"], (page.parent.name, width, seen)
+    text = (sweep / "report.html").read_text(encoding="utf-8")
+    assert "F2_weld_mean [N]" in text and "F2_peak [N]" in text
