@@ -21,7 +21,6 @@ import tempfile
 import time
 from pathlib import Path
 
-
 from sewfmu.components.build import ensure_built
 from sewfmu.components.catalogue import FMUS
 from sewfmu.scenarios.format import Connection, Instance, Scenario, load

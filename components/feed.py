@@ -15,8 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .kinematics import LEFT, RIGHT, Angle, Motion, angle, check_assembly, dyad_rrr, link_angle, \
-    point_on_link
+from .kinematics import LEFT, RIGHT, Angle, Motion, angle, check_assembly, dyad_rrr, link_angle, point_on_link
 from .parameters import ANY, parameter, validate
 
 

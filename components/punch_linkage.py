@@ -16,8 +16,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .kinematics import RIGHT, Motion, angle, check_assembly, crank_turn, dyad_rrp, dyad_rrr, \
-    link_angle, point_on_link
+from .kinematics import (
+    RIGHT,
+    Motion,
+    angle,
+    check_assembly,
+    crank_turn,
+    dyad_rrp,
+    dyad_rrr,
+    link_angle,
+    point_on_link,
+)
 from .parameters import ANY, CHOICE, NONNEGATIVE, ParameterError, parameter, validate
 
 SIX_BAR = 0

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import math
 
-from .slave import Port, SewSlave
 from .shaft import MainShaft, ShaftParams
+from .slave import Port, SewSlave
 
 
 class MainShaftSlave(SewSlave):

@@ -43,6 +43,7 @@ from typing import Any, Callable, Sequence
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
 
+
 @dataclass(frozen=True)
 class Port:
     """An input, output or calculated parameter of an FMU."""

@@ -141,7 +141,6 @@ def cmd_export_ssp(args) -> None:
 
 def cmd_references(args) -> None:
     from ..components.catalogue import FMUS
-
     from . import regression as references
     from .runner import fmus_for_names
 

@@ -287,7 +287,8 @@ def check_instance_name(name: str) -> None:
             or not (name[0].isalpha() or name[0] == "_") \
             or not all(ch.isalnum() or ch in "_-" for ch in name):
         raise ValueError(f"an instance name starts with a letter or '_' and holds only letters, "
-                         f"digits, '_' and '-' (no '.', path separators or spaces; at most 64; not 'experiment'), got {name!r}")
+                         f"digits, '_' and '-' (no '.', path separators or spaces; at most 64; "
+                         f"not 'experiment'), got {name!r}")
 
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:

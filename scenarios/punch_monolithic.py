@@ -20,7 +20,6 @@ from ..components.parameters import with_values
 from ..components.punch_contact import GRAVITY, PunchContactParams
 from ..components.punch_linkage import PunchLinkage, PunchLinkageParams
 from ..components.shaft import MainShaft, ShaftParams
-
 from .sampling import sampled
 
 

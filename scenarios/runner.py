@@ -14,13 +14,11 @@ from typing import Callable
 import numpy as np
 
 from ..components.build import default_fmu_dir, ensure_built
-
 from . import analyses
 from .experiment import experiment_of
 from .format import Scenario, ScenarioError, label_of
 from .master import RunResult, run
 from .outputs import folder_for, replacing, write_atomic
-
 
 # the analyses whose scenarios the monolithic solution (scenarios/punch_monolithic.py) solves
 MONOLITHIC = ("punch", "punch_split")
@@ -154,7 +152,6 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     ran with (defaults included; `set` marks the scenario's own values), the master and step,
     sewfmu's version and each FMU's version with the hash of the code it carries."""
     from ..components.build import VERSION
-
     from .master import extracted_fmu
 
     described = {fmu: extracted_fmu(Path(path))[1] for fmu, path in fmu_paths.items()}

@@ -18,7 +18,6 @@ from fmpy import read_model_description
 
 from ..components.units import UNITS
 from .experiment import ssp_settings
-
 from .format import Scenario
 from .master import kind_of
 

@@ -26,8 +26,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .experiment import EXPERIMENT_KEYS
-from .format import (Connection, Instance, Scenario, ScenarioError, check_instance_name,
-                     check_one_source)
+from .format import Connection, Instance, Scenario, ScenarioError, check_instance_name, check_one_source
 from .outputs import alive
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"

@@ -9,8 +9,7 @@ do (docs/api.md). The models are in sewfmu.components, the master and scenarios 
 sewfmu.scenarios.
 """
 from ._version import __version__
-from .api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, \
-    show, sweep
+from .api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
            "Run", "Sweep", "Scenario", "ScenarioError"]

@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .scenarios.format import Scenario, ScenarioError, catalogue, load as _load_scenario
+from .scenarios.format import Scenario, ScenarioError, catalogue
+from .scenarios.format import load as _load_scenario
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
            "Scenario", "ScenarioError"]

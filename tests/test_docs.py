@@ -70,6 +70,7 @@ def test_every_example_of_the_api_page_runs(tmp_path, monkeypatch, fmu_paths):
             raise AssertionError(f"docs/api.md example {number} fails: {err!r}\n{block}") from err
 
 
+@pytest.mark.slow
 def test_the_example_notebook_runs(tmp_path, fmu_paths):
     """examples/punch_drive.ipynb executed as Jupyter would (nbclient, a Python kernel), in an
     empty folder: a run, a sweep and their plots, with the checks in its last cell."""

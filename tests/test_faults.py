@@ -24,6 +24,8 @@ from sewfmu.scenarios.format import ScenarioError, load
 from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
 from sewfmu.scenarios.workers import WorkerDied, run_tasks
 
+pytestmark = [pytest.mark.slow]
+
 REPO = Path(__file__).resolve().parent.parent
 PUNCH = (REPO / "scenarios" / "catalogue" / "punch_drive.toml").read_text()
 GRID = {"shaft.omega0": [100.0, 250.0], "punch.F30": [0.0, 8.0]}

@@ -67,6 +67,7 @@ def _runs() -> list:
             for name in sorted(catalogue()) for label, scenario in variants(load(name))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scenario", _runs())
 def test_every_catalogue_run_gives_the_same_numbers_with_fmi3(scenario, fmu_dir):
     fmi2 = simulate(scenario, fmu_dir)

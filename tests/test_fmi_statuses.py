@@ -180,6 +180,7 @@ print(json.dumps({"blocks": len(after) - len(before), "path_same": sys.path == p
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["PunchContact", "CarriageModal"])
 def test_instantiate_and_free_a_thousand_times_grows_neither_sys_path_nor_memory(fmus, name,
                                                                                 tmp_path):

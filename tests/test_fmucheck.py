@@ -21,10 +21,10 @@ from sewfmu.scenarios.hosts import host_environment
 from sewfmu.scenarios.regression import REFERENCE_DIR, read_options
 
 FMUCHECK = os.environ.get("SEWFMU_FMUCHECK", "")
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.slow, pytest.mark.interop, pytest.mark.skipif(
     not (FMUCHECK and os.access(FMUCHECK, os.X_OK)),
     reason="SEWFMU_FMUCHECK does not name an executable fmuCheck (the Modelica FMU Compliance "
-           "Checker, a host written in C): set it to run the FMUs outside Python")
+           "Checker, a host written in C): set it to run the FMUs outside Python")]
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +54,8 @@ def _fmucheck(fmu: Path, out: Path, home: Path, *options: str) -> subprocess.Com
 
 
 def test_the_home_holds_only_the_standard_library(stdlib_home):
-    probe = "import json, math, xml.etree.ElementTree\ntry:\n import numpy\nexcept ImportError:\n print('no numpy')"
+    probe = ("import json, math, xml.etree.ElementTree\ntry:\n import numpy\n"
+             "except ImportError:\n print('no numpy')")
     proc = subprocess.run([sys.executable, "-S", "-c", probe], env=_env(stdlib_home),
                           capture_output=True, text=True, timeout=60)
     assert proc.stdout.strip() == "no numpy", proc.stderr

@@ -15,9 +15,9 @@ from fmpy.validation import validate_fmu
 
 from sewfmu.components.carriage import CarriageDrive
 from sewfmu.components.catalogue import FMUS
-from sewfmu.components.punch_split import PunchBody
 from sewfmu.components.punch_contact import GRAVITY, PunchContactParams
 from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.components.punch_split import PunchBody
 from sewfmu.components.shaft import MainShaft
 from tests.fmu_host import Host
 

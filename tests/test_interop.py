@@ -18,6 +18,8 @@ from sewfmu.scenarios.format import load
 from sewfmu.scenarios.hosts import check_host_environment, host_environment
 from sewfmu.scenarios.runner import crosscheck, export
 
+pytestmark = [pytest.mark.slow, pytest.mark.interop]
+
 FIGURES_DEG = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg")
 FIGURES_N = ("F2_peak", "F2_weld_mean")
 

@@ -5,8 +5,17 @@ import math
 import numpy as np
 import pytest
 
-from sewfmu.components.kinematics import LEFT, RIGHT, AssemblyError, Motion, angle, dyad_rrp, dyad_rrr, \
-    link_angle, point_on_link
+from sewfmu.components.kinematics import (
+    LEFT,
+    RIGHT,
+    AssemblyError,
+    Motion,
+    angle,
+    dyad_rrp,
+    dyad_rrr,
+    link_angle,
+    point_on_link,
+)
 from sewfmu.components.punch_linkage import REQUIRED_DISPLACEMENT, PunchLinkage, PunchLinkageParams
 from sewfmu.scenarios.sampling import sampled
 

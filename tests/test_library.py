@@ -13,6 +13,8 @@ import pytest
 
 import sewfmu
 
+pytestmark = [pytest.mark.slow]
+
 REPO = Path(__file__).resolve().parent.parent
 
 

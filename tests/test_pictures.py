@@ -18,6 +18,8 @@ from sewfmu.scenarios.cli import main
 from sewfmu.scenarios.format import load
 from sewfmu.scenarios.runner import simulate
 
+pytestmark = [pytest.mark.slow]
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 needs_chromium = pytest.mark.skipif(
     CHROMIUM is None, reason="headless Chromium is not installed (Debian: apt-get install "

@@ -6,12 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from sewfmu.scenarios.divergence import Diverged
-
 from sewfmu.components.punch_contact import PunchContact, PunchContactParams
 from sewfmu.components.punch_split import Fabric, FabricParams, PunchBody
 from sewfmu.scenarios import coupling
 from sewfmu.scenarios.coupling import IterativeMaster
+from sewfmu.scenarios.divergence import Diverged
 from sewfmu.scenarios.format import load
 from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import monolithic_summary, summarize

@@ -15,7 +15,7 @@ from fmpy import read_model_description
 from sewfmu.components.carriage import CarriageModal, CarriageParams
 from sewfmu.scenarios.analyses import RunTooShort
 from sewfmu.scenarios.cli import explain, main
-from sewfmu.scenarios.divergence import DivergenceWatch, Diverged
+from sewfmu.scenarios.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.format import ScenarioError, load
 from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import run_scenario, summarize
@@ -374,6 +374,7 @@ def test_record_every_does_not_change_the_key_figures(fmu_paths):
 @pytest.mark.parametrize("scenario, grid", [("takeup", "shaft.omega0=400,500"),
                                             ("feed", "shaft.omega0=150,170"),
                                             ("carriage_startstop", "shaft.omega0=150,170")])
+@pytest.mark.slow
 def test_sweep_plots_and_reports_every_analysis(tmp_path, scenario, grid):
     out = tmp_path / "sweep"
     assert main(["sweep", scenario, "--grid", grid, "--workers", "1", "--plot", "--report",
@@ -385,4 +386,5 @@ def test_sweep_plots_and_reports_every_analysis(tmp_path, scenario, grid):
 def test_a_missing_extra_names_the_command_that_installs_it():
     err = ModuleNotFoundError("No module named 'distributed'", name="distributed")
     text = explain(err, "sweep")
-    assert "bug" not in text and 'pip install "sewfmu[dask]"' in text
+    # from where this sewfmu was installed (here: the checkout, editable)
+    assert "bug" not in text and 'pip install -e "' in text and '[dask]"' in text, text

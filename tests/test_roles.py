@@ -6,7 +6,6 @@ import pytest
 from sewfmu.scenarios.cli import main
 from sewfmu.scenarios.format import ScenarioError, load
 from sewfmu.scenarios.runner import run_scenario
-
 from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 
 RENAMED = {"shaft": "вал", "linkage": "рычаг", "punch": "ram"}

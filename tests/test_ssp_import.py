@@ -40,6 +40,7 @@ def _runs_of_catalogue():
 
 @pytest.mark.parametrize("name, scenario", _runs_of_catalogue(), ids=lambda v: v
                          if isinstance(v, str) else "")
+@pytest.mark.slow
 def test_an_exported_catalogue_scenario_read_back_gives_the_same_figures(tmp_path, name,
                                                                           scenario):
     ssp = export(scenario, tmp_path / f"{name}.ssp")

@@ -27,6 +27,7 @@ def _fmus(fmu_dir, monkeypatch):
     monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
 
 
+@pytest.mark.slow
 def test_dask_cluster_gives_the_same_table_as_the_local_pool(tmp_path):
     distributed = pytest.importorskip("distributed")
     points = grid_points(GRID)

@@ -8,11 +8,11 @@ import pytest
 
 from sewfmu.components.kinematics import AssemblyError, point_on_link
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
 from sewfmu.scenarios.format import load
 from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import summarize
 from sewfmu.scenarios.sampling import sampled
-from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 
@@ -122,6 +122,7 @@ def test_takeup_that_cannot_assemble_names_the_crank_angle():
         TakeupLinkage(TakeupParams(L_CD=8e-3))
 
 
+@pytest.mark.slow
 def test_studies_run_from_the_command_line(tmp_path, capsys):
     import json
 

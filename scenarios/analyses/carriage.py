@@ -17,7 +17,6 @@ import numpy as np
 from ...components.carriage import CarriageDrive, CarriageModal, CarriageParams
 from ...components.oscillator import DampedOscillator
 from ...components.parameters import with_values
-
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 

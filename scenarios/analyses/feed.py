@@ -16,7 +16,6 @@ import numpy as np
 from ...components.feed import FeedLinkage, FeedParams
 from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
-
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 

@@ -12,8 +12,6 @@ communication points and for the monolithic reference's dense samples:
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import column, last_revolution, whole_revolution

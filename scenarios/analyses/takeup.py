@@ -14,7 +14,6 @@ import numpy as np
 from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
 from ...components.takeup import TakeupLinkage, TakeupParams
-
 from ..sampling import sampled
 from . import column, last_revolution, parameters
 

@@ -68,8 +68,8 @@ def can_animate(scenario) -> bool:
 
 def animate(result, path: Path) -> Animation:
     """Write the GIF of a run of an animated analysis; return where its drawing lies."""
-    from PIL import Image
     import matplotlib
+    from PIL import Image
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -7,7 +7,6 @@ import numpy as np
 
 from ...components.carriage import CarriageModal, CarriageParams
 from ...components.parameters import with_values
-
 from .. import analyses
 from . import angle_label
 

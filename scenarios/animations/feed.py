@@ -6,7 +6,6 @@ import numpy as np
 
 from ...components.feed import FeedLinkage, FeedParams
 from ...components.parameters import with_values
-
 from .. import analyses
 from . import angle_label, reach
 

@@ -3,12 +3,10 @@ slider at the recorded ξ, the punch at its recorded height y over the fabric, s
 them, and the fabric's pressing force F2 as a bar."""
 from __future__ import annotations
 
-
 import numpy as np
 
 from ...components.parameters import with_values
 from ...components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
-
 from .. import analyses
 from ..analyses.punch import signal
 from . import angle_label

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from ...components.parameters import with_values
 from ...components.takeup import TakeupLinkage, TakeupParams
-
 from .. import analyses
 from . import angle_label, reach
 
