@@ -39,20 +39,21 @@ def cmd_list(args) -> None:
         doc = getattr(importlib.import_module(f"..components.{module}", __package__),
                       slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
-    from .runner import STUDIES
+    from .analyses import studies
 
     print("scenarios:")
     for name, path in sorted(catalogue().items()):
         print(f"  {name:18s} {load(str(path)).description}")
     print("studies:")
-    for name, study in sorted(STUDIES.items()):
+    for name, (_, study) in sorted(studies().items()):
         print(f"  {name:18s} {study.description}")
 
 
 def cmd_run(args) -> None:
-    from .runner import STUDIES, run_scenario, run_study
+    from .analyses import studies
+    from .runner import run_scenario, run_study
 
-    if args.scenario in STUDIES:
+    if args.scenario in studies():
         if args.set:
             raise ScenarioError(f"--set: the study {args.scenario} takes no settings")
         out = Path(args.out) if args.out else Path("results") / args.scenario

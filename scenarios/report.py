@@ -132,28 +132,11 @@ def write(path: Path, title: str, lead: str, sections: list[Section]) -> None:
     write_atomic(Path(path), lambda f: f.write(page))
 
 
-# --- units of the key figures ----------------------------------------------------------------
-_SUFFIXES = (("_percent_of_peak_speed", "%"), ("_per_min", "1/min"), ("_m_s2", "m/s²"),
-             ("_m_s", "m/s"), ("_deg", "°"), ("_mm", "mm"), ("_um", "µm"), ("_s", "s"))
-_NAMED = {"F2_peak": "N", "F2_weld_mean": "N", "omega1": "rad/s", "omega2": "rad/s",
-          "n_contacts": "1", "step": "s", "stop_time": "s"}
-
-
-def unit_of(figure: str) -> str:
-    """The unit of a key figure, from its name (the analyses name their figures so)."""
-    if figure in _NAMED:
-        return _NAMED[figure]
-    for suffix, unit in _SUFFIXES:
-        if figure.endswith(suffix):
-            return unit
-    return ""
-
-
 def figure_units(scenario) -> dict[str, str]:
     """The units of the key figures of the scenario's analysis (each declares them)."""
     from . import analyses
 
-    return dict(analyses.module(scenario.analysis).FIGURES) if scenario.analysis else {}
+    return dict(analyses.mechanism(scenario.analysis).figures) if scenario.analysis else {}
 
 
 def provenance_sections(provenance: dict) -> list[Section]:
@@ -217,21 +200,22 @@ def run_report(path: Path, scenario, runs: list[tuple], pictures: list[tuple[str
     write(path, f"sewfmu: {scenario.name}", scenario.description, sections)
 
 
-def study_report(path: Path, name: str, description: str, headline: dict, picture: Path) -> None:
+def study_report(path: Path, name: str, study, headline: dict, picture: Path) -> None:
     figures = Section("Headline figures")
     rows = []
     for key, value in headline.items():
+        unit = study.units.get(key, "")
         if isinstance(value, dict):
-            rows += [[f"{key} [{sub}]", v, unit_of(key)] for sub, v in value.items()]
+            rows += [[f"{key} [{sub}]", v, unit] for sub, v in value.items()]
         else:
-            rows.append([key, value, unit_of(key)])
+            rows.append([key, value, unit])
     figures.table(["figure", "value", "unit"], rows, numeric={1})
     shown = Section("Pictures")
-    shown.pictures([(description, picture)])
+    shown.pictures([(study.description, picture)])
     what = Section("What was run")
     from ..components.build import VERSION
     what.table(["", ""], [["study", name], ["sewfmu", VERSION]])
-    write(path, f"sewfmu: {name}", description, [figures, shown, what])
+    write(path, f"sewfmu: {name}", study.description, [figures, shown, what])
 
 
 def sweep_report(path: Path, scenario, rows: list[dict], swept: list[str],

@@ -7,9 +7,7 @@ from __future__ import annotations
 import json
 import math
 import time as clock
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -20,64 +18,21 @@ from .format import Scenario, ScenarioError, label_of
 from .master import RunResult, run
 from .outputs import folder_for, replacing, write_atomic
 
-# the analyses whose scenarios the monolithic solution (scenarios/punch_monolithic.py) solves
-MONOLITHIC = ("punch", "punch_split")
-
-
-def _feed_headline(study: dict) -> dict:
-    amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
-                                                 if r["assembles"] else "cannot assemble")
-                                   for r in rows}
-    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(study["lever_ratio"], "l5_over_l4"),
-            "phi5_amplitude_deg_by_l2_over_l8": amplitude(study["rod_ratio"], "l2_over_l8")}
-
-
-@dataclass(frozen=True)
-class Study:
-    """An evaluation of a model over parameter sets (not a co-simulation): a function of an
-    analysis module that returns the whole study, one that plots it, and its headline figures."""
-    description: str
-    module: str
-    compute: str
-    plot: str
-    headline: Callable[[dict], dict]
-
-
-STUDIES = {
-    "carriage_resonance": Study(
-        "Carriage: steady-state peak tip deflection |U2| for 600 to 2000 stitches/min, the "
-        "paper's carriage and its two remedies", "carriage", "resonance_study", "plot_resonance",
-        lambda s: {k: s[k] for k in ("omega1", "omega2", "resonant_stitch_rate",
-                                     "peak_abs_U2_at_1600_um")}),
-    "feed_ratio": Study(
-        "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
-        "branches' rod-length ratio l2/l8 from 0.7 to 1.7", "feed", "ratio_study", "plot_study",
-        _feed_headline),
-    "takeup_tolerance": Study(
-        "Thread take-up: E's path with link lengths off by ±0.1 mm, and the stroke against the "
-        "eccentric-pin adjustment of L_CD (±1 mm)", "takeup", "tolerance_study",
-        "plot_tolerance",
-        lambda s: {k: s[k] for k in ("nominal_stroke_mm",
-                                     "stroke_change_per_mm_of_pin_adjustment")}),
-}
-
 
 def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:
     """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
     and, with plot, NAME.png; with report, report.html; return the headline figures."""
-    study = STUDIES[name]
-    module = analyses.module(study.module)
-    data = getattr(module, study.compute)()
+    _, study = analyses.studies()[name]
+    data = study.compute()
     headline = study.headline(data)
     with replacing(out_dir) as staging:
         write_json(data, staging / "study.json")
         write_json(headline, staging / "summary.json")
         if plot or report:
-            getattr(module, study.plot)(data, staging / f"{name}.png")
+            study.plot(data, staging / f"{name}.png")
         if report:
             from .report import study_report
-            study_report(staging / "report.html", name, study.description, headline,
-                         staging / f"{name}.png")
+            study_report(staging / "report.html", name, study, headline, staging / f"{name}.png")
     return headline
 
 
@@ -109,9 +64,9 @@ def summarize(result: RunResult) -> dict:
     sc = result.scenario
     figures, units = {}, {}
     if sc.analysis:
-        module = analyses.module(sc.analysis)
-        figures = module.summary_of_run(result)
-        units = {key: module.FIGURES[key] for key in figures if key in module.FIGURES}
+        figures = analyses.module(sc.analysis).summary_of_run(result)
+        declared = analyses.mechanism(sc.analysis).figures
+        units = {key: declared[key] for key in figures if key in declared}
     # what the master did: the iterative master's passes, the adaptive master's steps
     master = {f"master_{k}": v for k, v in result.coupling.items()}
     units = {"step": "s", "stop_time": "s", "wall_time_s": "s", **units}
@@ -222,7 +177,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
 
     summary = summary_of_runs(scenario, runs)
     against_monolithic = {}
-    if report and scenario.analysis in MONOLITHIC:
+    if report and scenario.analysis and analyses.mechanism(scenario.analysis).monolithic:
         for label, result, own in runs:
             against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0])
     with replacing(out_dir) as staging:
@@ -251,7 +206,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
 def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, object, object]]:
     """(figure, co-simulation, monolithic, difference) for every key figure of the punch."""
     rows = []
-    for key in analyses.module("punch").FIGURES:
+    for key in analyses.mechanism("punch").figures:
         a, b = cosim.get(key), monolithic.get(key)
         diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
         rows.append((key, a, b, diff))
@@ -261,7 +216,7 @@ def comparison_rows(cosim: dict, monolithic: dict) -> list[tuple[str, object, ob
 def monolithic_summary(scenario: Scenario, rtol: float | None = None) -> tuple[dict, float]:
     """Key figures of the monolithic solution (the punch drive as one ODE, DOP853, tight
     tolerances, or `rtol` with atol = rtol/1000) and its wall time."""
-    if scenario.analysis not in MONOLITHIC:
+    if not (scenario.analysis and analyses.mechanism(scenario.analysis).monolithic):
         raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
     from . import punch_monolithic

@@ -312,9 +312,9 @@ def _experiment(root: ET.Element) -> dict:
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
     """The analysis whose roles the components' FMU types fill, if one does."""
-    from .analyses import ROLES, RoleError, bind
+    from .analyses import RoleError, bind, mechanisms
 
-    for analysis in ROLES:
+    for analysis in mechanisms():
         try:
             return analysis, bind(analysis, fmu_of, {})
         except RoleError:

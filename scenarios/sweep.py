@@ -328,7 +328,7 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
 
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
-        figures = [f for f in analyses.module(scenario.analysis).FIGURES if f != "n_contacts"]
+        figures = [f for f in analyses.mechanism(scenario.analysis).figures if f != "n_contacts"]
         plot_table(rows, swept, figures, picture, scenario.description)
     if report:
         from .report import sweep_report

@@ -216,7 +216,7 @@ def _figure_units(sc: Scenario) -> dict[str, str]:
 
     if not sc.analysis:
         return {}
-    return dict(analyses.module(sc.analysis).FIGURES)
+    return dict(analyses.mechanism(sc.analysis).figures)
 
 
 def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,

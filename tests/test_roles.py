@@ -89,3 +89,31 @@ def test_the_bound_instance_is_the_one_analysed(tmp_path):
         assert two[key] == alone[key], key
     assert two["contact_loss_deg"] != run_scenario(load("punch_drive"),
                                                    tmp_path / "soft")["contact_loss_deg"]
+
+
+def test_every_mechanism_is_declared_once_in_its_analysis_module():
+    """The descriptors are the one list of mechanisms: each names known FMUs for its roles,
+    units for its figures, an animation that exists and studies of their own; and no module
+    outside scenarios/analyses lists the analyses by name."""
+    import importlib
+    import re
+    from pathlib import Path
+
+    from sewfmu.components.catalogue import FMUS
+    from sewfmu.scenarios import analyses
+
+    found = analyses.mechanisms()
+    assert set(found) == {p.stem for p in Path(analyses.__file__).parent.glob("*.py")
+                          if p.stem != "__init__"}
+    for name, m in found.items():
+        assert m.roles and set(m.roles.values()) <= set(FMUS), name
+        assert m.figures and all(isinstance(u, str) and u for u in m.figures.values()), name
+        if m.animation:
+            importlib.import_module(f"sewfmu.scenarios.animations.{m.animation}").Scene
+        for study in m.studies.values():
+            assert callable(study.compute) and callable(study.plot) and study.units
+    scenarios = Path(analyses.__file__).parent.parent
+    for path in [*scenarios.glob("*.py"), *(scenarios / "animations").glob("*.py")]:
+        text = path.read_text(encoding="utf-8")
+        listed = re.findall(r"[\[{(]\s*\"punch\",\s*\"punch_split\"", text)
+        assert not listed, path

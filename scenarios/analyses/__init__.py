@@ -1,26 +1,76 @@
-"""The analyses: key figures, plots and studies, one module per mechanism.
+"""The analyses: one module per mechanism, each declaring what sewfmu knows of it in one
+`MECHANISM` descriptor: the roles its scenarios bind, its key figures with their units, the
+animation that draws it, whether the monolithic solution solves it, its studies. Everything that
+lists mechanisms (scenario binding, summaries, sweeps, reports, animations, studies, the SSP
+import's guess of an analysis) reads the descriptors found here; a new mechanism's module in
+this folder is found without being listed anywhere.
 
 An analysis names the roles it needs, each played by an instance of one FMU type (the punch
 analysis: a shaft, a linkage and a punch). A scenario binds its instances to the roles in its
 `roles` table, or leaves a role to be found by FMU type where exactly one instance has it; so
-instance names are the user's choice. The modules themselves (numpy, matplotlib) are imported
-when first used.
+instance names are the user's choice.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import math
+import pkgutil
+from dataclasses import dataclass, field
 from types import ModuleType
+from typing import Callable
 
-# analysis -> role -> the FMU type that plays it
-ROLES: dict[str, dict[str, str]] = {
-    "punch": {"shaft": "MainShaft", "linkage": "PunchLinkage", "punch": "PunchContact"},
-    "punch_split": {"shaft": "MainShaft", "linkage": "PunchLinkage", "body": "PunchBody",
-                    "fabric": "Fabric"},
-    "carriage": {"shaft": "MainShaft", "drive": "CarriageDrive", "carriage": "CarriageModal"},
-    "feed": {"shaft": "MainShaft", "feed": "FeedLinkage"},
-    "takeup": {"shaft": "MainShaft", "takeup": "TakeupLinkage"},
-}
+
+@dataclass(frozen=True)
+class Study:
+    """An evaluation of a model over parameter sets (not a co-simulation): `compute()` returns
+    the whole study, `plot(study, path)` draws it, `headline(study)` its headline figures,
+    whose units are `units`."""
+    description: str
+    compute: Callable[[], dict]
+    plot: Callable[[dict, object], None]
+    headline: Callable[[dict], dict]
+    units: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """What sewfmu knows of one mechanism's analysis (declared in its module as MECHANISM)."""
+    roles: dict[str, str]                  # role -> the FMU type that plays it
+    figures: dict[str, str]                # key figure -> unit (summary.json, sweeps, reports)
+    animation: str | None = None           # the module of scenarios/animations that draws it
+    monolithic: bool = False               # solved as one ODE by scenarios/punch_monolithic.py
+    studies: dict[str, Study] = field(default_factory=dict)
+
+
+@functools.cache
+def mechanisms() -> dict[str, Mechanism]:
+    """Every analysis module of this package by name -> its MECHANISM."""
+    found = {}
+    for info in pkgutil.iter_modules(__path__):
+        found[info.name] = importlib.import_module(f"{__name__}.{info.name}").MECHANISM
+    return found
+
+
+def mechanism(analysis: str) -> Mechanism:
+    known = mechanisms()
+    if analysis not in known:
+        raise RoleError(f"unknown analysis {analysis!r}{_close(analysis, known)} "
+                        f"(known: {', '.join(known)})")
+    return known[analysis]
+
+
+def studies() -> dict[str, tuple[str, Study]]:
+    """Every mechanism's studies: study name -> (analysis, study)."""
+    return {name: (analysis, study) for analysis, m in mechanisms().items()
+            for name, study in m.studies.items()}
+
+
+def _close(name: str, known) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 class RoleError(ValueError):
@@ -30,9 +80,7 @@ class RoleError(ValueError):
 def bind(analysis: str, fmu_of: dict[str, str], given: dict[str, str]) -> dict[str, str]:
     """role -> instance name for `analysis`: the `given` bindings, checked against the
     instances' FMU types (`fmu_of`: instance -> FMU), the others found by FMU type."""
-    if analysis not in ROLES:
-        raise RoleError(f"unknown analysis {analysis!r} (known: {', '.join(ROLES)})")
-    wanted = ROLES[analysis]
+    wanted = mechanism(analysis).roles
     unknown = [role for role in given if role not in wanted]
     if unknown:
         raise RoleError(f"roles.{unknown[0]}: the {analysis} analysis has no role "
@@ -61,8 +109,7 @@ def bind(analysis: str, fmu_of: dict[str, str], given: dict[str, str]) -> dict[s
 
 def module(analysis: str) -> ModuleType:
     """The module of an analysis (summary_of_run, plot, FIGURES, its studies)."""
-    if analysis not in ROLES:
-        raise RoleError(f"unknown analysis {analysis!r} (known: {', '.join(ROLES)})")
+    mechanism(analysis)
     return importlib.import_module(f"{__name__}.{analysis}")
 
 

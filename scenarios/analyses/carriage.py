@@ -18,7 +18,7 @@ from ...components.carriage import CarriageDrive, CarriageModal, CarriageParams
 from ...components.oscillator import DampedOscillator
 from ...components.parameters import with_values
 from ..sampling import sampled
-from . import column, last_revolution, parameters
+from . import Mechanism, Study, column, last_revolution, parameters
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"omega1": "rad/s", "omega2": "rad/s", "stitch_rate_per_min": "1/min",
@@ -150,3 +150,15 @@ def plot_resonance(study: dict, path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+MECHANISM = Mechanism(
+    roles={"shaft": "MainShaft", "drive": "CarriageDrive", "carriage": "CarriageModal"},
+    figures=FIGURES, animation="carriage",
+    studies={"carriage_resonance": Study(
+        "Carriage: steady-state peak tip deflection |U2| for 600 to 2000 stitches/min, the "
+        "paper's carriage and its two remedies", resonance_study, plot_resonance,
+        lambda s: {k: s[k] for k in ("omega1", "omega2", "resonant_stitch_rate",
+                                     "peak_abs_U2_at_1600_um")},
+        units={"omega1": "rad/s", "omega2": "rad/s", "resonant_stitch_rate": "1/min",
+               "peak_abs_U2_at_1600_um": "um"})})

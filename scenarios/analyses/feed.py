@@ -17,7 +17,7 @@ from ...components.feed import FeedLinkage, FeedParams
 from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
 from ..sampling import sampled
-from . import column, last_revolution, parameters
+from . import Mechanism, Study, column, last_revolution, parameters
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "deg",
@@ -150,3 +150,20 @@ def plot_study(study: dict, path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _headline(study: dict) -> dict:
+    amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
+                                                 if r["assembles"] else "cannot assemble")
+                                   for r in rows}
+    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(study["lever_ratio"], "l5_over_l4"),
+            "phi5_amplitude_deg_by_l2_over_l8": amplitude(study["rod_ratio"], "l2_over_l8")}
+
+
+MECHANISM = Mechanism(
+    roles={"shaft": "MainShaft", "feed": "FeedLinkage"}, figures=FIGURES, animation="feed",
+    studies={"feed_ratio": Study(
+        "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
+        "branches' rod-length ratio l2/l8 from 0.7 to 1.7", ratio_study, plot_study, _headline,
+        units={"phi5_amplitude_deg_by_l5_over_l4": "deg",
+               "phi5_amplitude_deg_by_l2_over_l8": "deg"})})

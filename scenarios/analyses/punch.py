@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import column, last_revolution, whole_revolution
+from . import Mechanism, column, last_revolution, whole_revolution
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"contact_onset_deg": "deg", "contact_loss_deg": "deg", "contact_duration_deg": "deg",
@@ -145,3 +145,8 @@ def plot(curves, path, title: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+MECHANISM = Mechanism(
+    roles={"shaft": "MainShaft", "linkage": "PunchLinkage", "punch": "PunchContact"},
+    figures=FIGURES, animation="punch", monolithic=True)

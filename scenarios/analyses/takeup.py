@@ -15,7 +15,7 @@ from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
 from ...components.takeup import TakeupLinkage, TakeupParams
 from ..sampling import sampled
-from . import column, last_revolution, parameters
+from . import Mechanism, Study, column, last_revolution, parameters
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"path_extent_z_mm": "mm", "path_extent_x_mm": "mm", "stroke_mm": "mm",
@@ -220,3 +220,13 @@ def plot_tolerance(study: dict, path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+MECHANISM = Mechanism(
+    roles={"shaft": "MainShaft", "takeup": "TakeupLinkage"}, figures=FIGURES, animation="takeup",
+    studies={"takeup_tolerance": Study(
+        "Thread take-up: E's path with link lengths off by ±0.1 mm, and the stroke against the "
+        "eccentric-pin adjustment of L_CD (±1 mm)", tolerance_study, plot_tolerance,
+        lambda s: {k: s[k] for k in ("nominal_stroke_mm",
+                                     "stroke_change_per_mm_of_pin_adjustment")},
+        units={"nominal_stroke_mm": "mm", "stroke_change_per_mm_of_pin_adjustment": "mm/mm"})})

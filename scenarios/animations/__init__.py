@@ -27,9 +27,6 @@ FRAME_MS = 90                 # display time of a frame
 TRACKED = "#ff0000"           # the recorded point every animation marks
 SIZE_IN = (5.0, 4.2)          # figure size (in) and resolution: 400 x 336 pixels
 DPI = 80
-# analysis -> the module that draws its mechanism
-ANIMATED = {"punch": "punch", "punch_split": "punch", "feed": "feed", "takeup": "takeup",
-            "carriage": "carriage"}
 
 
 @dataclass
@@ -63,7 +60,8 @@ def frame_samples(phi: np.ndarray, frames: int = FRAMES) -> list[int]:
 
 
 def can_animate(scenario) -> bool:
-    return scenario.analysis in ANIMATED
+    """Whether the scenario's mechanism has an animation (its analysis's descriptor says)."""
+    return bool(scenario.analysis) and analyses.mechanism(scenario.analysis).animation is not None
 
 
 def animate(result, path: Path) -> Animation:
@@ -74,10 +72,12 @@ def animate(result, path: Path) -> Animation:
     import matplotlib.pyplot as plt
 
     kind = result.scenario.analysis
-    if kind not in ANIMATED:
+    drawing = analyses.mechanism(kind).animation if kind else None
+    if drawing is None:
+        animated = [name for name, m in analyses.mechanisms().items() if m.animation]
         raise analyses.RoleError(f"no animation for the {kind!r} analysis "
-                                 f"(animated: {', '.join(ANIMATED)})")
-    scene = importlib.import_module(f"{__name__}.{ANIMATED[kind]}").Scene(result)
+                                 f"(animated: {', '.join(animated)})")
+    scene = importlib.import_module(f"{__name__}.{drawing}").Scene(result)
     samples = frame_samples(analyses.column(result, "shaft", "phi"))
     fig, ax = plt.subplots(figsize=SIZE_IN, dpi=DPI)
     images, tracked = [], []
