@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from sewfmu.scenarios.format import load
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import monolithic_summary, simulate, summarize
 
 FIGURES = ("contact_onset_deg", "contact_loss_deg", "F2_peak", "F2_weld_mean")

@@ -7,8 +7,8 @@ import argparse
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.format import load
-from sewfmu.scenarios.master import JacobiMaster
+from sewfmu.scenarios.fixed_step import JacobiMaster
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import fmus_for
 
 

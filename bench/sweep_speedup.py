@@ -8,7 +8,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.format import load
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import fmus_for
 from sewfmu.scenarios.sweep import points_of, run_sweep
 

@@ -7,8 +7,9 @@ import sys
 from pathlib import Path
 
 from .._version import __version__
-from .format import ScenarioError, catalogue, label_of, load, parse_value
+from .format import ScenarioError, label_of, parse_value
 from .interrupt import Interrupted, interrupt_on_sigterm
+from .loader import catalogue, load
 
 
 def _load_with_sets(name: str, sets: list[str]):

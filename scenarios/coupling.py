@@ -26,7 +26,8 @@ from typing import NamedTuple
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
-from .master import JacobiMaster, RunResult, reaches
+from .fixed_step import JacobiMaster
+from .master import RunResult, reaches
 
 ACCELERATIONS = ("aitken", "iqn-ils", "none")
 MAX_ITERATIONS = 25

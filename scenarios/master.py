@@ -774,58 +774,6 @@ class Master:
                 unit.instantiated = False
 
 
-class JacobiMaster(Master):
-    name = "jacobi"
-
-    def exchange_and_step(self, units, t, h):
-        for unit in units:
-            unit.do_step(t, h)
-        self.exchange(units)
-
-    def exchange(self, units) -> None:
-        """Every input from its source's outputs now (dependency order: along a chain
-        feedthrough settles in one pass; around a loop in one more pass per unit on it)."""
-        for unit in units:
-            unit.pull_inputs()
-            unit.read_outputs()
-        self.settle_loops()
-
-    def settle_loops(self) -> None:
-        for _ in range(self.passes - 1):
-            for unit in self.in_loops:
-                if unit.pull_changed_inputs():    # unchanged: the outputs read stand
-                    unit.read_outputs()
-
-
-class GaussSeidelMaster(Master):
-    name = "gauss-seidel"
-
-    def _plan(self, units):
-        # around a loop the consumers-first sweep hands an FMU its partner's values of t + h
-        # (extrapolated from t) as if they were of t: on punch_split a one-step lead of the
-        # fabric's force that makes the punch chatter (7 contacts instead of 1)
-        if self.in_loops:
-            raise ScenarioError(f"{self.scenario.source}: experiment.master = \"gauss-seidel\" "
-                                f"cannot run the feedback loop of "
-                                f"{', '.join(u.name for u in self.in_loops)}; use \"jacobi\", "
-                                f"\"iterative\" or \"adaptive\"")
-        return super()._plan(units)
-
-    def exchange_and_step(self, units, t, h):
-        for unit in reversed(units):      # consumers first: see the module docstring
-            unit.pull_inputs()
-            unit.do_step(t, h)
-            unit.read_outputs()
-
-
-def _master_classes() -> dict[str, type]:
-    # the masters for feedback live beside the pieces they are made of
-    from .adaptive import AdaptiveMaster
-    from .coupling import IterativeMaster
-    return {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster,
-                                      AdaptiveMaster)}
-
-
 def _dependency_order(units: list[FmuInstance]) -> tuple[list[FmuInstance], list[FmuInstance]]:
     """Sources before the units they feed (a cycle keeps the scenario's order within it), and
     the units that lie on a feedback loop."""
@@ -857,7 +805,3 @@ def reaches(start: FmuInstance, target: FmuInstance) -> bool:
             seen.add(unit.name)
             todo.extend(src for _, src, _ in unit.inputs)
     return False
-
-
-def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:
-    return _master_classes()[scenario.master](scenario, fmu_paths).run(progress)

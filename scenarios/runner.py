@@ -15,7 +15,8 @@ from ..components.build import default_fmu_dir, ensure_built
 from . import analyses
 from .experiment import experiment_of
 from .format import Scenario, ScenarioError, label_of
-from .master import RunResult, run
+from .master import RunResult
+from .masters import run
 from .outputs import folder_for, replacing, write_atomic
 
 

@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .scenarios.format import Scenario, ScenarioError, catalogue
-from .scenarios.format import load as _load_scenario
+from .scenarios.format import Scenario, ScenarioError
+from .scenarios.loader import catalogue
+from .scenarios.loader import load as _load_scenario
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
            "Scenario", "ScenarioError"]
@@ -51,7 +52,7 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
 
 def show(scenario: str) -> str:
     """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`)."""
-    from .scenarios.format import resolve
+    from .scenarios.loader import resolve
 
     path = resolve(scenario)
     if path.suffix.lower() != ".toml":

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from sewfmu.scenarios.adaptive import AdaptiveMaster
-from sewfmu.scenarios.format import load
-from sewfmu.scenarios.master import run
+from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.masters import run
 from sewfmu.scenarios.runner import monolithic_summary, summarize
 
 

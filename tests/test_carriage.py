@@ -9,8 +9,8 @@ from scipy.linalg import eigh
 
 from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
 from sewfmu.scenarios.analyses.carriage import periodic_response, resonance_study
-from sewfmu.scenarios.format import load
-from sewfmu.scenarios.master import run
+from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.masters import run
 from sewfmu.scenarios.runner import summarize
 from sewfmu.scenarios.sampling import sampled
 

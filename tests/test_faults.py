@@ -20,7 +20,8 @@ from pathlib import Path
 import pytest
 
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.format import ScenarioError
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
 from sewfmu.scenarios.workers import WorkerDied, run_tasks
 

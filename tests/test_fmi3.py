@@ -15,7 +15,7 @@ from fmpy.fmi1 import FMICallException
 from sewfmu.components.catalogue import FMUS
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.scenarios import regression as references
-from sewfmu.scenarios.format import catalogue, load
+from sewfmu.scenarios.loader import catalogue, load
 from sewfmu.scenarios.runner import export, simulate, variants
 from tests.fmu_host import Host
 

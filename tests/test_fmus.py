@@ -275,8 +275,8 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
     import zipfile
 
     from sewfmu.components.build import build_fmu
-    from sewfmu.scenarios.format import load
-    from sewfmu.scenarios.master import run
+    from sewfmu.scenarios.loader import load
+    from sewfmu.scenarios.masters import run
 
     before = list(sys.path)
     sc = load("punch_drive")
@@ -297,8 +297,8 @@ def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_di
     folder = fmu3_dir if fmi == 3 else fmu_dir
     code = (f"import zipfile\n"
             f"from pathlib import Path\n"
-            f"from sewfmu.scenarios.format import load\n"
-            f"from sewfmu.scenarios.master import run\n"
+            f"from sewfmu.scenarios.loader import load\n"
+            f"from sewfmu.scenarios.masters import run\n"
             f"from sewfmu.components.build import build_fmu\n"
             f"sc = load('punch_drive'); sc.revolutions = 1\n"
             f"run(sc, {{p.stem: p for p in Path({str(folder)!r}).glob('*.fmu')}})\n"

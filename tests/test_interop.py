@@ -14,8 +14,8 @@ from sewfmu.components.build import PACKAGE_DIR, build_fmu
 from sewfmu.components.catalogue import FMUS
 from sewfmu.scenarios import regression as references
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import load
 from sewfmu.scenarios.hosts import check_host_environment, host_environment
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import crosscheck, export
 
 pytestmark = [pytest.mark.slow, pytest.mark.interop]

@@ -15,7 +15,7 @@ from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.takeup import TakeupLinkage
 from sewfmu.scenarios.animations import FRAMES, animate
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import load
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import simulate
 
 pytestmark = [pytest.mark.slow]

@@ -11,8 +11,8 @@ from sewfmu.components.punch_split import Fabric, FabricParams, PunchBody
 from sewfmu.scenarios import coupling
 from sewfmu.scenarios.coupling import IterativeMaster
 from sewfmu.scenarios.divergence import Diverged
-from sewfmu.scenarios.format import load
-from sewfmu.scenarios.master import run
+from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.masters import run
 from sewfmu.scenarios.runner import monolithic_summary, summarize
 
 

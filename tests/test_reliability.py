@@ -14,8 +14,10 @@ from hypothesis import strategies as st
 from sewfmu.components.build import PACKAGE_DIR, build_fmu
 from sewfmu.components.punch_contact import GRAVITY, PunchContact, PunchContactParams
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import ScenarioError, load
-from sewfmu.scenarios.master import CosimError, JacobiMaster
+from sewfmu.scenarios.fixed_step import JacobiMaster
+from sewfmu.scenarios.format import ScenarioError
+from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.master import CosimError
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent

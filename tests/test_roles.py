@@ -4,7 +4,8 @@ analyses and a shaft that is not a MainShaft are errors naming what is wrong."""
 import pytest
 
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import ScenarioError, load
+from sewfmu.scenarios.format import ScenarioError
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.runner import run_scenario
 from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 

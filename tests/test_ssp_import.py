@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import catalogue, load
+from sewfmu.scenarios.loader import catalogue, load
 from sewfmu.scenarios.runner import export, simulate, summarize
 
 SKIP = ("scenario", "master", "step", "stop_time", "wall_time_s")

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from sewfmu.scenarios.format import load
+from sewfmu.scenarios.loader import load
 from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, run_sweep
 
 GRID = {"shaft.omega0": [100.0, 250.0], "punch.F30": [0.0, 8.0]}

@@ -1,0 +1,70 @@
+"""Where scenarios come from: the catalogue that ships with sewfmu (catalogue/*.toml), a TOML
+file (scenarios/format.py reads it), or an SSP system (scenarios/ssp_import.py)."""
+from __future__ import annotations
+
+import codecs
+import hashlib
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from .format import Scenario, ScenarioError, did_you_mean, from_dict
+from .ssp_import import load_ssp
+
+
+def catalogue() -> dict[str, Path]:
+    """The scenarios that ship with sewfmu: name -> path."""
+    folder = resources.files(__package__) / "catalogue"
+    return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
+
+
+def resolve(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.suffix.lower() in (".ssp", ".ssd"):
+        return path
+    if path.suffix == ".toml":
+        if not path.is_file():
+            raise ScenarioError(f"scenario file {path} does not exist")
+        return path
+    known = catalogue()
+    if name_or_path not in known:
+        raise ScenarioError(f"unknown scenario {name_or_path!r}"
+                            f"{did_you_mean(name_or_path, known)} (catalogue: "
+                            f"{', '.join(sorted(known))}; or give a path to a .toml file)")
+    return known[name_or_path]
+
+
+def load(name_or_path: str) -> Scenario:
+    """A catalogue scenario, a TOML scenario file, or an SSP system (.ssp or .ssd)."""
+    path = resolve(name_or_path)
+    if path.suffix.lower() in (".ssp", ".ssd"):
+        return load_ssp(path)
+    try:
+        text = _text_of(path.read_bytes(), path)
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ScenarioError(f"{path}: not valid TOML: {err}") from None
+    except OSError as err:
+        raise ScenarioError(f"{path}: cannot read: {err.strerror or err}") from None
+    scenario = from_dict(data, path.stem, str(path))
+    scenario.digest = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return scenario
+
+
+def _text_of(raw: bytes, path: Path) -> str:
+    """A scenario file's text: UTF-8 (TOML's encoding), with or without a byte-order mark; a
+    UTF-16 file (with its mark, as some Windows editors save) is read too. Anything else is an
+    error that says where the first byte that is not UTF-8 is."""
+    for mark, codec in ((codecs.BOM_UTF8, "utf-8"), (codecs.BOM_UTF16_LE, "utf-16-le"),
+                        (codecs.BOM_UTF16_BE, "utf-16-be")):
+        if raw.startswith(mark):
+            raw, encoding = raw[len(mark):], codec
+            break
+    else:
+        encoding = "utf-8"
+    try:
+        return raw.decode(encoding)
+    except UnicodeDecodeError as err:
+        line = raw[:err.start].count(b"\n") + 1
+        raise ScenarioError(f"{path}: line {line}: byte 0x{raw[err.start]:02x} is not "
+                            f"{encoding.upper()} text; save the file as UTF-8") from None
