@@ -3,7 +3,9 @@ communication step.
 
 One base class owns the whole run: loading and extracting the FMUs, initialization in dependency
 order, the stepping loop, recording into a preallocated numpy array and freeing every instance
-whatever happens. A variant declares only its `exchange_and_step`:
+whatever happens. A variant declares its `exchange_and_step` (and, for feedback, the hooks it
+overrides); the variants live in their own modules (fixed_step.py, coupling.py, adaptive.py) and
+masters.py names them:
 
 - Jacobi: every FMU steps from the values at t; then, in dependency order, each FMU's inputs are
   set from its sources' outputs at t + h (a direct-feedthrough FMU's outputs follow its new inputs
