@@ -29,7 +29,8 @@ GROWTH = 10.0        # growth of a window's largest magnitude over the previous 
 STREAK = 4           # windows in a row
 
 
-def _bound(text) -> float | None:
+def declared_bound(text) -> float | None:
+    """A variable's declared min or max as a number; None where it declares none."""
     try:
         return float(text) if text is not None else None
     except ValueError:
@@ -46,8 +47,8 @@ class DivergenceWatch:
         for unit in loop_units:
             for k, (name, src, out) in enumerate(unit.inputs):
                 dst_var, src_var = unit.variables[name], src.variables[out]
-                lo = _tighter(max, _bound(dst_var.min), _bound(src_var.min))
-                hi = _tighter(min, _bound(dst_var.max), _bound(src_var.max))
+                lo = _tighter(max, declared_bound(dst_var.min), declared_bound(src_var.min))
+                hi = _tighter(min, declared_bound(dst_var.max), declared_bound(src_var.max))
                 self.signals.append((unit, k, name, f"{src.name}.{out}", lo, hi,
                                      dst_var.unit or src_var.unit or ""))
         self.window_max = [0.0] * len(self.signals)
@@ -62,7 +63,7 @@ class DivergenceWatch:
             if (lo is not None and value < lo) or (hi is not None and value > hi) \
                     or not math.isfinite(value):
                 self._raise(t, f"{unit.name}.{name} = {value:.6g} {unit_name} (from {source}) "
-                               f"left its declared range [{_text(lo, '-inf')}, {_text(hi, 'inf')}] "
+                               f"left its declared range [{bound_text(lo, '-inf')}, {bound_text(hi, 'inf')}] "
                                f"{unit_name}")
             magnitude = abs(value)
             if magnitude > self.window_max[j]:
@@ -90,5 +91,5 @@ def _tighter(pick, a, b):
     return b if a is None else a if b is None else pick(a, b)
 
 
-def _text(bound, unbounded: str) -> str:
+def bound_text(bound, unbounded: str) -> str:
     return unbounded if bound is None else f"{bound:g}"

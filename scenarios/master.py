@@ -55,7 +55,7 @@ from fmpy.fmi2 import (
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
 from . import interrupt
-from .divergence import DivergenceWatch
+from .divergence import DivergenceWatch, bound_text, declared_bound
 from .format import Scenario, ScenarioError, did_you_mean
 
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -143,12 +143,12 @@ def check_parameters(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
             if kind_of(v) == "Integer" and value != int(value):
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: must be an integer, "
                                     f"got {value!r}")
-            low, high = _number_or_none(v.min), _number_or_none(v.max)
+            low, high = declared_bound(v.min), declared_bound(v.max)
             if (low is not None and value < low) or (high is not None and value > high):
                 hint = _unit_hint(v.unit, value) if high is not None and value > high else ""
                 raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: parameter {key} = "
                                     f"{value:g} {v.unit or ''} is outside the range "
-                                    f"[{_g(low, '-inf')}, {_g(high, 'inf')}] {inst.name} "
+                                    f"[{bound_text(low, '-inf')}, {bound_text(high, 'inf')}] {inst.name} "
                                     f"({md.modelName}) declares{hint}")
 
 
@@ -187,17 +187,6 @@ def check_memory(rows: int, columns: int, source: str, what: str = "records") ->
                             f"points (experiment.record_every = {every} or more; the key "
                             f"figures are read from every step of the last revolution all the "
                             f"same), record fewer columns, or take a longer step")
-
-
-def _number_or_none(text) -> float | None:
-    try:
-        return None if text is None else float(text)
-    except ValueError:
-        return None
-
-
-def _g(value, unbounded: str) -> str:
-    return unbounded if value is None else f"{value:g}"
 
 
 def _unit_hint(unit: str | None, value: float) -> str:

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from . import analyses
 from .outputs import write_atomic
 
 STYLE = """
@@ -132,13 +133,6 @@ def write(path: Path, title: str, lead: str, sections: list[Section]) -> None:
     write_atomic(Path(path), lambda f: f.write(page))
 
 
-def figure_units(scenario) -> dict[str, str]:
-    """The units of the key figures of the scenario's analysis (each declares them)."""
-    from . import analyses
-
-    return dict(analyses.mechanism(scenario.analysis).figures) if scenario.analysis else {}
-
-
 def provenance_sections(provenance: dict) -> list[Section]:
     """What was run: the scenario, master, step, versions; every parameter (the scenario's own
     values in bold)."""
@@ -229,7 +223,7 @@ def sweep_report(path: Path, scenario, rows: list[dict], swept: list[str],
     table = Section("Points")
     columns = ["index", *swept, "status"]
     columns += [k for k in rows[0] if k not in columns and k not in ("key", "error")]
-    units = {"stop_time": "s", "wall_time_s": "s", **figure_units(scenario)}
+    units = {"stop_time": "s", "wall_time_s": "s", **analyses.figure_units(scenario.analysis)}
     table.table([f"{c} [{units[c]}]" if units.get(c) and c not in swept else c
                  for c in columns] + ["error"],
                 [[r.get(c) for c in columns] + [r.get("error", "")] for r in rows],

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from .scenarios.analyses import figure_units
 from .scenarios.format import Scenario, ScenarioError
 from .scenarios.loader import catalogue
 from .scenarios.loader import load as _load_scenario
@@ -196,7 +197,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         if out is not None and (plot or report):
             sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
-    units.update({"stop_time": "s", "wall_time_s": "s", **_figure_units(sc)})
+    units.update({"stop_time": "s", "wall_time_s": "s", **figure_units(sc.analysis)})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
 
@@ -212,14 +213,6 @@ def _unit_of(sc: Scenario, target: str) -> str:
     return "" if fmu in sc.fmu_files else parameter_units(fmu).get(key, "")
 
 
-def _figure_units(sc: Scenario) -> dict[str, str]:
-    from .scenarios import analyses
-
-    if not sc.analysis:
-        return {}
-    return dict(analyses.mechanism(sc.analysis).figures)
-
-
 def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
             rtol: float | None = None) -> dict[str, dict]:
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
@@ -228,7 +221,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     from .scenarios.runner import compare as compare_rows
 
     sc = load(scenario, set)
-    units = {**_figure_units(sc), "wall_time_s": "s"}
+    units = {**figure_units(sc.analysis), "wall_time_s": "s"}
     out = {}
     for row in compare_rows(sc, rtol=rtol):
         if rtol is None:

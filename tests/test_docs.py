@@ -44,12 +44,15 @@ def test_links_and_pictures_resolve():
 
 
 def test_no_file_points_outside_the_repository():
+    # the team's specification folder beside the repository, named without writing its path
+    # here (this file would otherwise point there itself)
+    outside = "/".join(("..", "shared"))
     for path in REPO.rglob("*"):
         if (path.is_file() and path.suffix in (".py", ".md", ".toml", ".txt", ".cfg")
                 and path != Path(__file__).resolve()
                 and not {".venv", ".git", "fmus", "results"} & set(path.relative_to(REPO).parts)):
             text = path.read_text(encoding="utf-8", errors="replace")
-            assert "../shared" not in text and "MECHANISMS.md" not in text, path
+            assert outside not in text and "MECHANISMS.md" not in text, path
 
 
 def python_blocks(page: Path) -> list[str]:

@@ -60,6 +60,11 @@ def mechanism(analysis: str) -> Mechanism:
     return known[analysis]
 
 
+def figure_units(analysis: str | None) -> dict[str, str]:
+    """The units of an analysis's key figures ({} for a run without an analysis)."""
+    return dict(mechanism(analysis).figures) if analysis else {}
+
+
 def studies() -> dict[str, tuple[str, Study]]:
     """Every mechanism's studies: study name -> (analysis, study)."""
     return {name: (analysis, study) for analysis, m in mechanisms().items()
