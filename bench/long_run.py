@@ -7,8 +7,8 @@ import argparse
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.fixed_step import JacobiMaster
 from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.master import Master
 from sewfmu.scenarios.runner import fmus_for
 
 
@@ -30,7 +30,7 @@ def main():
     paths = fmus_for(sc)
     print("| steps | resident size [MiB] | wall [s] |\n|---|---|---|")
     start = time.perf_counter()
-    with JacobiMaster(sc, paths) as master:
+    with Master(sc, paths) as master:
         print(f"| 0 | {rss_mib():.1f} | 0 |")
         for k in range(1, args.steps + 1):
             master.step()

@@ -22,10 +22,10 @@ import time
 from pathlib import Path
 
 from sewfmu.components.build import ensure_built
-from sewfmu.components.catalogue import FMUS
+from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.format import Connection, Instance, Scenario
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import monolithic_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent

@@ -13,22 +13,22 @@ from pathlib import Path
 from fmpy.fmi1 import FMICallException
 
 from sewfmu.components.build import ensure_built
-from sewfmu.components.catalogue import FMUS
-from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
+from sewfmu.components.registry import FMUS
+from sewfmu.scenarios.fmi_calls import LogCollector
+from sewfmu.scenarios.instances import open_instance
 
 
 def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str]:
     """A fresh instance, `values` set during initialization, one doStep(0, h), timed."""
-    unzip_dir, md = extracted_fmu(path)
     log = LogCollector()
-    unit = FmuInstance(name, unzip_dir, md, log)
+    unit = open_instance(name, path, log)
     unit.prepare()
     unit.instantiate()
     fmu = unit.fmu
     unit.enter_initialization(stop=h)
     for key, value in values.items():
         unit.set_parameter(unit.variables[key], value)
-    fmu.exitInitializationMode()
+    unit.exit_initialization()
     started = time.perf_counter()
     try:
         fmu.doStep(0.0, h)

@@ -30,7 +30,7 @@ import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
 from .._version import __version__
-from .catalogue import FMI_VERSIONS, FMUS
+from .registry import FMI_VERSIONS, FMUS
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 VERSION = __version__     # sewfmu's one version (sewfmu/_version.py)

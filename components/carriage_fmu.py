@@ -4,7 +4,8 @@ from __future__ import annotations
 import math
 
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
-from .slave import LinkageSlave, Port, SewSlave
+from .ports import Port
+from .slave import LinkageSlave, SewSlave
 
 SPEED = 1600 * 2 * math.pi / 60          # the semi-automat's 1600 stitches/min, in rad/s
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 
+from .ports import Port
 from .punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 from .punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams
-from .slave import LinkageSlave, Port, SewSlave, fields_of
+from .slave import LinkageSlave, SewSlave, fields_of
 
 _SETUP_HEIGHT = PunchLinkageParams().xi0    # the punch at the top of the setup position
 _BODY = PunchBodyParams()                    # the defaults the Fabric's start values assume

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import math
 
+from .ports import Port
 from .shaft import MainShaft, ShaftParams
-from .slave import Port, SewSlave
+from .slave import SewSlave
 
 
 class MainShaftSlave(SewSlave):

@@ -36,51 +36,13 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
-
-
-@dataclass(frozen=True)
-class Port:
-    """An input, output or calculated parameter of an FMU."""
-    name: str
-    unit: str
-    description: str
-    start: float = 0.0             # inputs only
-    feedthrough: bool = False      # outputs only: depends on the inputs at the same instant
-    kind: str = "Real"             # "Real" or "Boolean"
-    source: str = ""               # linkage outputs: where in the model's motion the value is
-                                   # ("E.x", "joints.M.vy"); default: the port's name
-    bound: float | None = -1.0     # inputs: the largest magnitude the mechanism can see; -1:
-                                   # SIGNAL_SCALE of the unit; None: unbounded (a cumulative angle)
-
-
-# The largest magnitude an input of each unit has in a running sewing-machine mechanism (an
-# order of magnitude above the hardest case of the catalogue): the declared min/max of an
-# input. A value beyond it is refused at doStep: it is a co-simulation that diverges (the punch
-# pressed metres into the fabric) or a value in another unit, never a figure to compute with.
-SIGNAL_SCALE: dict[str, float] = {
-    "m": 0.1, "m/s": 100.0, "m/s2": 1e6, "m/s3": 1e9, "N": 1e5, "N/s": 1e10,
-    "rad/s": 2000.0, "rad/s2": 1e7,
-}
-
-
-def shaft_inputs(omega: float) -> tuple[Port, Port, Port]:
-    """The main shaft's motion, the inputs of every linkage (extrapolated inside a step), starting
-    at the setup position φ = 0 and turning at `omega`: the mechanism's own default speed, so
-    that a host that starts the inputs at their start values runs it at that speed."""
-    return (
-        Port("phi", "rad", "shaft angle, cumulative (the crank angle of the linkage)"),
-        Port("omega", "rad/s", "shaft speed", start=omega),
-        Port("epsilon", "rad/s2", "shaft angular acceleration"),
-    )
-
-
-SHAFT_TAYLOR = (("phi", "omega", "epsilon"),)
+from .ports import SHAFT_TAYLOR, Port, held_note, input_bound, input_ranges, shaft_inputs
+from .pythonfmu_quirks import ExceptionFreeAccess, describe, forget_resources_path
 
 # a step must start where the last one ended, to within this fraction of max(1 s, |t|, h)
 _TIME_TOLERANCE = 1e-9
@@ -107,7 +69,7 @@ class Variable:
     max: float | None = None
 
 
-class SewSlave:
+class SewSlave(ExceptionFreeAccess):
     """Base of every sewfmu FMU; see the module docstring for what it adds to pythonfmu. An FMI
     layer comes after it in the class's bases and provides `_error(message)`, the register
     of `self.variables` and the names of its calls (`call_names`)."""
@@ -137,7 +99,7 @@ class SewSlave:
     def __init__(self, **kwargs):
         super().__init__(**kwargs)     # the layer's pythonfmu base
         if "logger" in kwargs:         # instantiated by pythonfmu's binary, not by its builder
-            _forget_resources_path(kwargs.get("resources"))
+            forget_resources_path(kwargs.get("resources"))
         cls = type(self)
         self.modelName = cls.model_name or cls.__name__
         self.description = (cls.__doc__ or "").strip().splitlines()[0]
@@ -181,11 +143,11 @@ class SewSlave:
         rate_of = {rate: value for chain in cls.taylor_inputs
                    for value, rate in zip(chain, chain[1:])}
         declared += [Variable(port.name, "Real", "input",
-                              f"{port.description} [{port.unit}]" + _held_note(port.name, rate_of),
+                              f"{port.description} [{port.unit}]" + held_note(port.name, rate_of),
                               port.unit, self._input_getter(port.name),
                               self._input_setter(port.name), start=float(port.start),
-                              min=None if _bound(port) is None else -_bound(port),
-                              max=_bound(port))
+                              min=None if input_bound(port) is None else -input_bound(port),
+                              max=input_bound(port))
                      for port in cls.inputs]
         declared += [Variable(port.name, port.kind, "output",
                               f"{port.description} [{port.unit}]", port.unit,
@@ -243,7 +205,7 @@ class SewSlave:
         try:
             outputs = self.current_outputs()
         except Exception as err:          # noqa: BLE001 - any failure is reported, none escapes
-            self._error_once(f"outputs unavailable: {_describe(err)}")
+            self._error_once(f"outputs unavailable: {describe(err)}")
             return {p.name: (False if p.kind == "Boolean" else math.nan)
                     for p in (*type(self).outputs, *type(self).calculated)}
         bad = _non_finite(outputs)
@@ -326,52 +288,6 @@ class SewSlave:
                         f"diverges, or a value in another unit")
         return None
 
-    # --- getting and setting, for the layer's calls: none lets an exception reach pythonfmu ----
-    # pythonfmu's getters and setters check every variable's type on every call and raise on a
-    # wrong one; these look the getter up directly (the hot path of a co-simulation step) and
-    # answer an unknown value reference with a log line
-    def get_reals(self, vrs) -> list[float]:
-        try:
-            return [float(self._real_getters[vr]()) for vr in vrs]
-        except Exception:                 # noqa: BLE001 - an unknown reference: answered below
-            return self.get_values(vrs, "Real")
-
-    def get_values(self, vrs, kind: str) -> list:
-        convert, missing = _CONVERT[kind]
-        return [self._get(vr, kind, convert, missing) for vr in vrs]
-
-    def _get(self, vr, kind, convert, missing):
-        if self._kinds.get(vr) != kind:
-            self._error_once(f"{self._call(kind, 0)}: no such variable (value reference {vr})")
-            return missing
-        try:
-            return convert(self._getters[vr]())
-        except Exception as err:          # noqa: BLE001
-            self._error_once(f"value reference {vr}: {_describe(err)}")
-            return missing
-
-    def set_reals(self, vrs, values) -> None:
-        try:
-            setters = [self._real_setters[vr] for vr in vrs]
-        except (KeyError, TypeError):     # not a settable Real: answered below
-            self.set_values(vrs, values, "Real")
-            return
-        for set_value, value in zip(setters, values):
-            set_value(value)
-
-    def set_values(self, vrs, values, kind: str) -> None:
-        for vr, value in zip(vrs, values):
-            setter = self._setters.get(vr)
-            if setter is None or self._kinds.get(vr) != kind:
-                name = self._names.get(vr, f"value reference {vr}")
-                self._error(f"{self._call(kind, 1)}: {name} cannot be set this way "
-                            f"(value {value!r} ignored)")
-                continue
-            setter(value)
-
-    def _call(self, kind: str, which: int) -> str:
-        return type(self).call_names.get(kind, ("Get", "Set"))[which]
-
     # --- the life of an instance ---------------------------------------------------------------
     def exit_initialization_mode(self):
         self._initialized = True
@@ -383,7 +299,7 @@ class SewSlave:
                 raise FmuError(f"{bad} at initialization")
             self.initialize(model)
         except Exception as err:          # noqa: BLE001
-            self._broken = _describe(err)
+            self._broken = describe(err)
             self._error(f"{self._broken}; every doStep of this instance will be refused")
 
     def do_step(self, current_time, step_size):
@@ -416,7 +332,7 @@ class SewSlave:
             internal, self._elapsed, self._time = saved
             self.restore_internal(internal)
             self._cache = None
-            self._error(f"doStep({t:g}, {h:g}) discarded: {_describe(err)}")
+            self._error(f"doStep({t:g}, {h:g}) discarded: {describe(err)}")
             return False
         self._set_since_step.clear()
         return True
@@ -460,7 +376,7 @@ class SewSlave:
             self._set_since_step, self._held = set(fresh), set(held)
             self._cache = None
         except Exception as err:          # noqa: BLE001 - a damaged or foreign state
-            self._error(f"SetFMUState: not a state of this FMU ({_describe(err)}); the "
+            self._error(f"SetFMUState: not a state of this FMU ({describe(err)}); the "
                         f"instance is left as it was")
 
     @staticmethod
@@ -472,7 +388,7 @@ class SewSlave:
         try:
             return json.loads(state.decode("utf-8"))
         except Exception as err:          # noqa: BLE001 - refused by _set_fmu_state
-            return {"unreadable": _describe(err)}
+            return {"unreadable": describe(err)}
 
     def save_layer(self) -> dict[str, Any]:
         """What the FMI layer keeps of its own, as plain JSON-able values."""
@@ -523,45 +439,10 @@ class LinkageSlave(SewSlave):
         return {name: float(_pick(motion, path)) for name, path in type(self)._paths}
 
 
-def _bound(port: Port) -> float | None:
-    """The largest magnitude an input takes: its own, or its unit's SIGNAL_SCALE."""
-    return SIGNAL_SCALE.get(port.unit) if port.bound == -1.0 else port.bound
-
-
-def input_ranges(inputs: Sequence[Port]) -> tuple[tuple[str, float, str], ...]:
-    """(name, bound, unit) of every bounded input."""
-    return tuple((p.name, _bound(p), p.unit) for p in inputs if _bound(p) is not None)
-
-
-def _held_note(name: str, rate_of: dict[str, str]) -> str:
-    """What a rate input's description says of a host that does not set it."""
-    if name not in rate_of:
-        return ""
-    return (f"; acts as zero unless set each time {rate_of[name]} is (a host that sets only "
-            f"{rate_of[name]} gets it held between steps)")
-
-
 def _pick(value, path: tuple[str, ...]):
     for key in path:
         value = value[key] if isinstance(value, dict) else getattr(value, key)
     return value
-
-
-# kind -> (conversion of a got value, the answer for a reference of another kind)
-_CONVERT: dict[str, tuple[Callable[[Any], Any], Any]] = {
-    "Real": (float, math.nan), "Integer": (int, 0), "Boolean": (bool, False), "String": (str, ""),
-    "Int64": (int, 0), "UInt64": (int, 0),             # FMI 3.0 kinds no sewfmu variable has
-}
-
-
-def _describe(err: Exception) -> str:
-    """An exception as the one line a log needs: the model's own message, or what kind of
-    failure it was."""
-    text = str(err)
-    # the models' own exceptions (parameters, assembly, step too long, chatter) say it for users
-    if type(err).__module__.rpartition(".")[0] == __name__.rpartition(".")[0] and text:
-        return text
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
 def _non_finite(values: dict[str, Any]) -> str | None:
@@ -577,15 +458,6 @@ def _non_finite(values: dict[str, Any]) -> str | None:
         if any(isinstance(x, float) and not math.isfinite(x) for x in items):
             return key
     return None
-
-
-def _forget_resources_path(resources: str | None) -> None:
-    """pythonfmu puts the instance's resources folder first on sys.path at every instantiation
-    (to import the FMU's script) and never takes it out: sys.path would grow with every instance,
-    and the host's later imports would find the FMU's copies first. The FMU's modules are
-    imported by now, so the entry is removed again."""
-    if resources and resources in sys.path:
-        sys.path.remove(resources)
 
 
 def fields_of(obj) -> dict[str, Any]:

@@ -33,7 +33,7 @@ def cmd_build(args) -> None:
 def cmd_list(args) -> None:
     import importlib
 
-    from ..components.catalogue import FMUS
+    from ..components.registry import FMUS
 
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
@@ -142,7 +142,7 @@ def cmd_export_ssp(args) -> None:
 
 
 def cmd_references(args) -> None:
-    from ..components.catalogue import FMUS
+    from ..components.registry import FMUS
     from . import regression as references
     from .runner import fmus_for_names
 
@@ -322,8 +322,8 @@ def explain(err: Exception, command: str) -> str:
     """An error as one line that says what was wrong and where."""
     from .analyses import RoleError, RunTooShort
     from .divergence import Diverged
+    from .fmi_calls import CosimError
     from .hosts import HostError
-    from .master import CosimError
     from .outputs import OutputError
 
     if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,

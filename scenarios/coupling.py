@@ -19,17 +19,16 @@ The better u comes from an acceleration of the fixed-point iteration u <- u + r:
 """
 from __future__ import annotations
 
-import ctypes
 import math
 from typing import NamedTuple
 
 import numpy as np
-from fmpy.fmi1 import FMICallException
 
-from .fixed_step import JacobiMaster
-from .master import RunResult, reaches
+from .algorithm_settings import IterativeSettings
+from .fixed_step import Jacobi
+from .rollback import Rollback
+from .system import reaches
 
-ACCELERATIONS = ("aitken", "iqn-ils", "none")
 MAX_ITERATIONS = 25
 INITIAL_RELAXATION = 0.5
 
@@ -38,9 +37,7 @@ class Acceleration:
     """Proposes the next assumed end values from the residuals of one step's iterations."""
 
     def __init__(self, kind: str):
-        if kind not in ACCELERATIONS:
-            raise ValueError(f"unknown acceleration {kind!r} (known: {', '.join(ACCELERATIONS)})")
-        self.kind = kind
+        self.kind = kind          # one of IterativeSettings.ACCELERATIONS
 
     def start(self) -> None:
         self.us, self.rs = [], []
@@ -66,59 +63,28 @@ class Acceleration:
         return given[-1] + W @ alpha
 
 
-class SavedStates:
-    """Saved FMU states of some instances (raw FMI calls: fmpy's wrapper costs µs)."""
-
-    def __init__(self, units):
-        self.units = units
-        self.states = [ctypes.c_void_p() for _ in units]      # fmi2FMUstate, fmi3FMUState
-        self.raw = [u.raw_state_calls() for u in units]
-
-    def save(self) -> None:
-        for unit, state, (get, _, free) in zip(self.units, self.states, self.raw):
-            if state:
-                free(unit.component, ctypes.byref(state))
-            status = get(unit.component, ctypes.byref(state))
-            if status > 1:
-                unit._check("get_state", status)
-
-    def restore(self) -> None:
-        for unit, state, (_, set_state, _) in zip(self.units, self.states, self.raw):
-            status = set_state(unit.component, state)
-            if status > 1:
-                unit._check("set_state", status)
-
-    def free(self) -> None:
-        for unit, state, (_, _, free) in zip(self.units, self.states, self.raw):
-            if state:
-                try:
-                    free(unit.component, ctypes.byref(state))
-                except (FMICallException, OSError):
-                    pass
-
-
 class RateChain(NamedTuple):
     """A connected input X that comes with its rate X_dot (and X_ddot) on the same FMU: the FMU
     extrapolates X within a step from them."""
     position: int          # of the FMU in the list the chains were found in
-    unit: object           # the FmuInstance
+    instance: object       # the Instance
     value: int             # index of X in the FMU's connected inputs
     rate: int              # of X_dot
     second: int | None     # of X_ddot, if connected
-    source: object         # the FmuInstance that gives X
+    source: object         # the Instance that gives X
     output: int            # index of X in the source's Real outputs
 
 
-def rate_chains(units) -> list[RateChain]:
+def rate_chains(instances) -> list[RateChain]:
     """Every rate-paired input of the given FMUs (the iterative master interpolates them, the
     adaptive master measures their extrapolation error)."""
     chains = []
-    for position, unit in enumerate(units):
-        names = [name for name, _, _ in unit.inputs]
-        for k, (name, src, out) in enumerate(unit.inputs):
+    for position, inst in enumerate(instances):
+        names = [name for name, _, _ in inst.inputs]
+        for k, (name, src, out) in enumerate(inst.inputs):
             if f"{name}_dot" in names:
                 second = names.index(f"{name}_ddot") if f"{name}_ddot" in names else None
-                chains.append(RateChain(position, unit, k, names.index(f"{name}_dot"), second,
+                chains.append(RateChain(position, inst, k, names.index(f"{name}_dot"), second,
                                         src, src.real_out.index(out)))
     return chains
 
@@ -131,79 +97,74 @@ def finite(values: np.ndarray) -> bool:
     return math.isfinite(float(np.sum(values)))
 
 
-class IterativeMaster(JacobiMaster):
+class Iterative(Jacobi):
     """Jacobi, with every communication step around a feedback loop repeated until the values
-    exchanged on it agree with those assumed (scenarios/coupling.py). Without a loop it is
+    exchanged on it agree with those assumed (see the module docstring). Without a loop it is
     Jacobi."""
 
     name = "iterative"
+    Settings = IterativeSettings
+    rolls_back = True
 
-    def open(self) -> None:
-        super().open()
-        loop = self.in_loops
-        downstream = [u for u in self.instances if u not in loop
-                      and any(reaches(u, member) for member in loop)]
-        self.before = [u for u in self.instances if u not in loop and u not in downstream]
+    def start(self, system, step):
+        loop = system.in_loops
+        downstream = [i for i in system.instances if i not in loop
+                      and any(reaches(i, member) for member in loop)]
+        self.before = [i for i in system.instances if i not in loop and i not in downstream]
         self.loop, self.after = loop, downstream
         # the inputs interpolated over a step: those fed from the loop itself
         self.pairs = [c for c in rate_chains(loop) if c.source in loop]
-        self.loop_states = SavedStates(loop) if self.pairs else None
-        self.acceleration = Acceleration(self.scenario.acceleration)
+        self.rollback = Rollback(loop) if self.pairs else None
+        self.acceleration = Acceleration(self.settings.acceleration)
         self.iterations = 0            # passes over all steps
         self.unconverged: list[tuple[float, float]] = []   # (t, largest |residual|)
 
-    def close(self) -> None:
-        if getattr(self, "loop_states", None) is not None:
-            self.loop_states.free()
-        super().close()
+    def close(self):
+        if getattr(self, "rollback", None) is not None:
+            self.rollback.free()
 
-    def exchange_and_step(self, units, t, h):
-        if self.loop_states is None:
-            return super().exchange_and_step(units, t, h)
-        for unit in self.before:
-            unit.do_step(t, h)
-        for unit in self.before:
-            unit.pull_inputs()
-            unit.read_outputs()
-        self.loop_states.save()
-        inputs_at_t = [list(unit.in_buf) for unit in self.loop]
-        start = np.array([c.unit.in_buf[c.value] for c in self.pairs])
-        rate = np.array([c.unit.in_buf[c.rate] for c in self.pairs])
+    def advance(self, system, t, h):
+        if self.rollback is None:
+            return super().advance(system, t, h)
+        for inst in self.before:
+            inst.do_step(t, h)
+        for inst in self.before:
+            inst.pull_inputs()
+            inst.read_outputs()
+        self.rollback.save()
+        start = np.array([c.instance.in_buf[c.value] for c in self.pairs])
+        rate = np.array([c.instance.in_buf[c.rate] for c in self.pairs])
         assumed = start + rate * h          # the explicit coupling's own guess
+        tolerance = self.settings.tolerance
         self.acceleration.start()
         for iteration in range(MAX_ITERATIONS):
             if iteration:
-                self.loop_states.restore()
-            for unit, saved in zip(self.loop, inputs_at_t):
-                unit.in_buf[:] = saved
+                self.rollback.restore(read_outputs=False)     # stepped and exchanged below
             for j, c in enumerate(self.pairs):
-                c.unit.in_buf[c.rate] = (assumed[j] - start[j]) / h
-            for unit in self.loop:
-                unit.set_inputs()
-                unit.do_step(t, h)
-            self.exchange(self.loop)
+                c.instance.in_buf[c.rate] = (assumed[j] - start[j]) / h
+            for inst in self.loop:
+                inst.set_inputs()
+                inst.do_step(t, h)
+            self.exchange(system, self.loop)
             given = np.array([c.source.out_buf[c.output] for c in self.pairs])
             residual = given - assumed
             self.iterations += 1
-            if converged(residual, given, self.scenario.coupling_tolerance()):
+            if converged(residual, given, tolerance):
                 break
-
             if not finite(residual):
                 break
             assumed = self.acceleration.next(assumed, residual)
         else:
             self.unconverged.append((t, float(np.max(np.abs(residual)))))
-        for unit in self.after:
-            unit.do_step(t, h)
+        for inst in self.after:
+            inst.do_step(t, h)
         if self.after:
-            self.exchange(units)
+            self.exchange(system, system.instances)
+        return h
 
-    def result(self) -> RunResult:
-        result = super().result()
-        steps = max(1, self.k)
-        result.coupling = {"iterations_per_step": self.iterations / steps,
-                           "unconverged_steps": len(self.unconverged)}
-        for t, size in self.unconverged[:5]:
-            result.log.append(f"[WARNING] iterative coupling: the step from t = {t:g} s did "
-                              f"not converge in its iterations (residual {size:.3g})")
-        return result
+    def report(self, steps):
+        coupling = {"iterations_per_step": self.iterations / max(1, steps),
+                    "unconverged_steps": len(self.unconverged)}
+        warnings = [f"[WARNING] iterative coupling: the step from t = {t:g} s did not converge "
+                    f"in its iterations (residual {size:.3g})" for t, size in self.unconverged[:5]]
+        return coupling, warnings

@@ -38,18 +38,18 @@ def declared_bound(text) -> float | None:
 
 
 class DivergenceWatch:
-    """Watches the inputs of the FMUs on feedback loops (master.FmuInstance objects)."""
+    """Watches the inputs of the FMUs on feedback loops (scenarios.instances.Instance objects)."""
 
-    def __init__(self, loop_units, step: float):
+    def __init__(self, loop_instances, step: float):
         self.step = step
-        self.names = ", ".join(u.name for u in loop_units)
-        self.signals = []            # (unit, index in in_buf, input name, source text, lo, hi, unit)
-        for unit in loop_units:
-            for k, (name, src, out) in enumerate(unit.inputs):
-                dst_var, src_var = unit.variables[name], src.variables[out]
+        self.names = ", ".join(u.name for u in loop_instances)
+        self.signals = []            # (instance, index in in_buf, input name, source text, lo, hi, unit)
+        for inst in loop_instances:
+            for k, (name, src, out) in enumerate(inst.inputs):
+                dst_var, src_var = inst.variables[name], src.variables[out]
                 lo = _tighter(max, declared_bound(dst_var.min), declared_bound(src_var.min))
                 hi = _tighter(min, declared_bound(dst_var.max), declared_bound(src_var.max))
-                self.signals.append((unit, k, name, f"{src.name}.{out}", lo, hi,
+                self.signals.append((inst, k, name, f"{src.name}.{out}", lo, hi,
                                      dst_var.unit or src_var.unit or ""))
         self.window_max = [0.0] * len(self.signals)
         self.previous = [0.0] * len(self.signals)
@@ -58,13 +58,13 @@ class DivergenceWatch:
 
     def check(self, t: float) -> None:
         """After the step that ended at t: raise Diverged if a watched input diverges."""
-        for j, (unit, k, name, source, lo, hi, unit_name) in enumerate(self.signals):
-            value = unit.in_buf[k]
+        for j, (inst, k, name, source, lo, hi, unit) in enumerate(self.signals):
+            value = inst.in_buf[k]
             if (lo is not None and value < lo) or (hi is not None and value > hi) \
                     or not math.isfinite(value):
-                self._raise(t, f"{unit.name}.{name} = {value:.6g} {unit_name} (from {source}) "
+                self._raise(t, f"{inst.name}.{name} = {value:.6g} {unit} (from {source}) "
                                f"left its declared range [{bound_text(lo, '-inf')}, {bound_text(hi, 'inf')}] "
-                               f"{unit_name}")
+                               f"{unit}")
             magnitude = abs(value)
             if magnitude > self.window_max[j]:
                 self.window_max[j] = magnitude
@@ -75,8 +75,8 @@ class DivergenceWatch:
             now, before = self.window_max[j], self.previous[j]
             self.streak[j] = self.streak[j] + 1 if before > 0.0 and now > GROWTH * before else 0
             if self.streak[j] >= STREAK:
-                unit, _, name, source, *_ = signal
-                self._raise(t, f"{unit.name}.{name} (from {source}) grew {now / before:.3g}-fold "
+                inst, _, name, source, *_ = signal
+                self._raise(t, f"{inst.name}.{name} (from {source}) grew {now / before:.3g}-fold "
                                f"in {WINDOW} steps, {STREAK} times in a row (now {now:.3g})")
             self.previous[j], self.window_max[j] = now, 0.0
 

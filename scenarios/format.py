@@ -36,25 +36,20 @@ scenarios/experiment.py). Every mistake is a ScenarioError that names the file a
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..components.catalogue import FMI_VERSIONS, FMUS, parameter_units
+from ..components.registry import FMI_VERSIONS, FMUS, parameter_units
+from .algorithm_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from .experiment import EXPERIMENT_KEYS
 
-MASTERS = ("jacobi", "gauss-seidel", "iterative", "adaptive")
-ACCELERATIONS = ("aitken", "iqn-ils", "none")       # of the iterative master (scenarios/coupling.py)
-# experiment.tolerance, where not given: the iterative master's relative agreement of the
-# exchanged values; the adaptive master's local extrapolation error of the exchanged signals,
-# relative to their amplitude (scenarios/adaptive.py)
-DEFAULT_TOLERANCE = {"iterative": 1e-6, "adaptive": 1e-5}
-# the tolerances each master honours: above, its errors exceed the figures' own accuracy (the
-# adaptive master at 1e-1 is 1.2° off the contact onset); below, the adaptive master's steps
-# reach their floor (step/1000) and the iterative master's passes the rounding of the values
-TOLERANCE_RANGE = {"iterative": (1e-12, 1e-2), "adaptive": (1e-8, 1e-2)}
+# the masters and their settings (defaults, the tolerances each honours): one class per master in
+# scenarios/algorithm_settings.py
+MASTERS = MASTER_NAMES
 
 
 class ScenarioError(ValueError):
@@ -105,27 +100,23 @@ class Scenario:
     # FMU type -> file, for a system read from SSP (scenarios/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
 
-    def coupling_tolerance(self) -> float:
-        """experiment.tolerance, or the master's default (a scenario file's tolerance belongs to
-        the file's master: run with another master, that master's default applies)."""
+    def settings(self):
+        """The typed settings of its master (scenarios/algorithm_settings.py): the file's
+        tolerance and acceleration where given, else the master's defaults. A scenario file's
+        tolerance belongs to the file's master: run with another master, that master's default
+        applies."""
+        given = {"acceleration": self.acceleration}
         if self.tolerance and self.tolerance_master in (None, self.master):
-            low, high = TOLERANCE_RANGE.get(self.master, (0.0, math.inf))
-            if not low <= self.tolerance <= high:
-                raise ScenarioError(f"{self.source}: experiment.tolerance = {self.tolerance:g}: "
-                                    f"the {self.master} master honours tolerances from "
-                                    f"{low:g} to {high:g}")
-            return self.tolerance
-        return DEFAULT_TOLERANCE.get(self.master, 1e-6)
+            given["tolerance"] = self.tolerance
+        try:
+            return settings_for(self.master, given)
+        except SettingError as err:
+            raise ScenarioError(f"{self.source}: {err}") from None
 
     def master_settings(self) -> dict[str, Any]:
-        """The settings its master uses besides the step: the tolerance of the iterative and the
-        adaptive master, the iterative master's acceleration."""
-        settings: dict[str, Any] = {}
-        if self.master in DEFAULT_TOLERANCE:
-            settings["tolerance"] = self.coupling_tolerance()
-        if self.master == "iterative":
-            settings["acceleration"] = self.acceleration
-        return settings
+        """The settings its master uses besides the step, by key (a tolerance or an
+        acceleration it ignores is left out)."""
+        return dataclasses.asdict(self.settings())
 
     def copy(self) -> "Scenario":
         return copy.deepcopy(self)
@@ -160,20 +151,20 @@ class Scenario:
         n = max(1, math.ceil(end / self.step * (1.0 - 1e-12)))
         return n, end / n
 
-    def last_revolution_start(self) -> float:
-        """The time the last whole revolution of the counted shaft begins (0 where the scenario
-        has no MainShaft to count): from there on every step is recorded, whatever
+    def last_revolution_start(self) -> float | None:
+        """The time the last whole revolution of the counted shaft begins (None where the
+        scenario has no MainShaft to count): from there on every step is recorded, whatever
         experiment.record_every thins out before, so that the key figures never depend on it."""
         from ..components.parameters import ParameterError, with_values
         from ..components.shaft import MainShaft, ShaftParams
 
         shaft = self.shaft or self.default_shaft()
         if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
-            return 0.0
+            return None
         try:
             model = MainShaft(with_values(ShaftParams(), **self.instances[shaft].parameters))
         except ParameterError:
-            return 0.0
+            return None
         turns = math.floor(model.state(self.end_time())[0] / (2 * math.pi) + 1e-9)
         return model.time_of_angle(2 * math.pi * (turns - 1)) if turns >= 1 else 0.0
 

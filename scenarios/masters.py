@@ -1,23 +1,12 @@
-"""The masters by name (experiment.master), and `run`: a scenario run by its master.
-
-The run loop, recording and rollback are Master's (scenarios/master.py); the algorithms are
-beside it: Jacobi and Gauss–Seidel (fixed_step.py), iterative (coupling.py), adaptive
-(adaptive.py).
+"""The co-simulation algorithms by name (experiment.master): Jacobi and Gauss–Seidel
+(fixed_step.py), iterative (coupling.py), adaptive (adaptive.py). The run loop that steps them is
+scenarios/master.py; their settings are scenarios/algorithm_settings.py's.
 """
 from __future__ import annotations
 
-from pathlib import Path
+from .adaptive import Adaptive
+from .coupling import Iterative
+from .fixed_step import GaussSeidel, Jacobi
 
-from .adaptive import AdaptiveMaster
-from .coupling import IterativeMaster
-from .fixed_step import GaussSeidelMaster, JacobiMaster
-from .format import Scenario
-from .master import RunResult
+ALGORITHMS = {cls.name: cls for cls in (Jacobi, GaussSeidel, Iterative, Adaptive)}
 
-MASTERS = {cls.name: cls for cls in (JacobiMaster, GaussSeidelMaster, IterativeMaster,
-                                     AdaptiveMaster)}
-
-
-def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:
-    """Run the scenario with its experiment.master on these FMU files."""
-    return MASTERS[scenario.master](scenario, fmu_paths).run(progress)

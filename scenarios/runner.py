@@ -15,8 +15,7 @@ from ..components.build import default_fmu_dir, ensure_built
 from . import analyses
 from .experiment import experiment_of
 from .format import Scenario, ScenarioError, label_of
-from .master import RunResult
-from .masters import run
+from .master import RunResult, run
 from .outputs import folder_for, replacing, write_atomic
 
 
@@ -45,7 +44,7 @@ def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
 
 
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
-    from ..components.catalogue import FMUS
+    from ..components.registry import FMUS
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
     if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
@@ -108,7 +107,7 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     ran with (defaults included; `set` marks the scenario's own values), the master and step,
     sewfmu's version and each FMU's version with the hash of the code it carries."""
     from ..components.build import VERSION
-    from .master import extracted_fmu
+    from .instances import extracted_fmu
 
     described = {fmu: extracted_fmu(Path(path))[1] for fmu, path in fmu_paths.items()}
     instances = {}

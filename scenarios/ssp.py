@@ -18,8 +18,8 @@ from fmpy import read_model_description
 
 from ..components.units import UNITS
 from .experiment import ssp_settings
+from .fmi_calls import kind_of
 from .format import Scenario
-from .master import kind_of
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

@@ -189,8 +189,9 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
               scheduler: str | None = None, keep_results: bool = False,
               progress: bool = True) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order."""
-    from .master import check_parameters
+    from .instances import extracted_fmu
     from .runner import fmus_for
+    from .system import check_parameters
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):
@@ -201,7 +202,8 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         probe = scenario.copy()
         for target, value in point.values:
             probe.set_value(target, value, origin=f"{scenario.source}: sweep")
-        check_parameters(probe, paths)
+        check_parameters(probe, {inst.name: extracted_fmu(Path(paths[inst.fmu]))[1]
+                                 for inst in probe.instances.values()})
     out_dir.mkdir(parents=True, exist_ok=True)
     remove_debris(out_dir, recursive=True)
     settings = settings_of(scenario, paths)

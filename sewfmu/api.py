@@ -204,7 +204,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
 
 def _unit_of(sc: Scenario, target: str) -> str:
     """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
-    from .components.catalogue import parameter_units
+    from .components.registry import parameter_units
 
     inst, _, key = target.partition(".")
     if inst == "experiment":
@@ -240,7 +240,7 @@ def build(fmi: int = 2, dest: str | Path | None = None,
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
     fmus/fmi3/); return their paths."""
     from .components.build import build_fmu, default_fmu_dir
-    from .components.catalogue import FMUS
+    from .components.registry import FMUS
     from .scenarios.format import did_you_mean
 
     if isinstance(fmi, bool) or fmi not in (2, 3):

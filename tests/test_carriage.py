@@ -10,7 +10,7 @@ from scipy.linalg import eigh
 from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
 from sewfmu.scenarios.analyses.carriage import periodic_response, resonance_study
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import summarize
 from sewfmu.scenarios.sampling import sampled
 

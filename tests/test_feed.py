@@ -9,7 +9,7 @@ from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.scenarios.analyses.feed import ratio_study
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import summarize
 from sewfmu.scenarios.sampling import sampled
 

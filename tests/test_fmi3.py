@@ -12,8 +12,8 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
-from sewfmu.components.catalogue import FMUS
 from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.components.registry import FMUS
 from sewfmu.scenarios import regression as references
 from sewfmu.scenarios.loader import catalogue, load
 from sewfmu.scenarios.runner import export, simulate, variants
@@ -114,15 +114,16 @@ _SIDE_BY_SIDE = """
 import sys
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
+from sewfmu.scenarios.fmi_calls import LogCollector
+from sewfmu.scenarios.instances import open_instance
 units = []
 for path in sys.argv[2:]:
-    unzip, md = extracted_fmu(Path(path))
-    unit = FmuInstance.for_fmu(md.fmiVersion, unzip, md, LogCollector())
+    unit = open_instance("fmi", Path(path), LogCollector())
+    unit.name = unit.md.fmiVersion
     unit.real_out = ["phi"]
     unit.prepare(); unit.instantiate(); unit.enter_initialization(1.0)
     unit.set_parameter(unit.variables["omega0"], 40.0)
-    unit.fmu.exitInitializationMode()
+    unit.exit_initialization()
     units.append(unit)
 for k in range(10):
     for unit in units:

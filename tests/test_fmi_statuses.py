@@ -158,13 +158,13 @@ _CYCLES = """
 import gc, json, sys, tracemalloc
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from sewfmu.scenarios.master import FmuInstance, LogCollector, extracted_fmu
-unzip, md = extracted_fmu(Path(sys.argv[2]))
+from sewfmu.scenarios.fmi_calls import LogCollector
+from sewfmu.scenarios.instances import open_instance
 log = LogCollector()
-unit = FmuInstance.for_fmu("cycle", unzip, md, log)       # FMI 2.0 or 3.0: one library object
+unit = open_instance("cycle", Path(sys.argv[2]), log)       # FMI 2.0 or 3.0: one library object
 unit.prepare()
 def cycle():
-    unit.instantiate(); unit.enter_initialization(1.0); unit.fmu.exitInitializationMode()
+    unit.instantiate(); unit.enter_initialization(1.0); unit.exit_initialization()
     unit.do_step(0.0, 1e-4); unit.release()
 for _ in range(20):
     cycle()

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sewfmu.components.catalogue import FMUS
 from sewfmu.components.punch_linkage import PunchLinkage
+from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.hosts import host_environment
 from sewfmu.scenarios.regression import REFERENCE_DIR, read_options
 

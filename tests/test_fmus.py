@@ -14,10 +14,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from sewfmu.components.carriage import CarriageDrive
-from sewfmu.components.catalogue import FMUS
 from sewfmu.components.punch_contact import GRAVITY, PunchContactParams
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.punch_split import PunchBody
+from sewfmu.components.registry import FMUS
 from sewfmu.components.shaft import MainShaft
 from tests.fmu_host import Host
 
@@ -276,7 +276,7 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
 
     from sewfmu.components.build import build_fmu
     from sewfmu.scenarios.loader import load
-    from sewfmu.scenarios.masters import run
+    from sewfmu.scenarios.master import run
 
     before = list(sys.path)
     sc = load("punch_drive")
@@ -298,7 +298,7 @@ def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_di
     code = (f"import zipfile\n"
             f"from pathlib import Path\n"
             f"from sewfmu.scenarios.loader import load\n"
-            f"from sewfmu.scenarios.masters import run\n"
+            f"from sewfmu.scenarios.master import run\n"
             f"from sewfmu.components.build import build_fmu\n"
             f"sc = load('punch_drive'); sc.revolutions = 1\n"
             f"run(sc, {{p.stem: p for p in Path({str(folder)!r}).glob('*.fmu')}})\n"

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from sewfmu.components.build import PACKAGE_DIR, build_fmu
-from sewfmu.components.catalogue import FMUS
+from sewfmu.components.registry import FMUS
 from sewfmu.scenarios import regression as references
 from sewfmu.scenarios.cli import main
 from sewfmu.scenarios.hosts import check_host_environment, host_environment
@@ -96,7 +96,7 @@ def test_a_non_python_host_without_its_environment_gets_a_clear_message(capsys, 
 def test_every_fmu_matches_its_regression_reference(fmu_paths, name):
     folder = references.REFERENCE_DIR / name
     assert (folder / f"{name}_ref.csv").exists() and (folder / f"{name}_ref.opt").exists()
-    assert (folder / f"{name}_in.csv").exists() == (references.CASES[name].inputs is not None)
+    assert (folder / f"{name}_in.csv").exists() == (references.cases()[name].inputs is not None)
     assert references.check(name, fmu_paths[name]) == []
 
 

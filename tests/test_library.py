@@ -105,7 +105,7 @@ def test_version_from_one_place(plain_install, tmp_path):
 def test_references_work_from_a_plain_install_in_any_folder(plain_install, tmp_path):
     proc = _in_a_user_folder(plain_install, tmp_path / "w", "-m", "sewfmu", "references")
     assert proc.returncode == 0, proc.stderr[-2000:]
-    from sewfmu.components.catalogue import FMUS
+    from sewfmu.components.registry import FMUS
     assert f"all {len(FMUS)} FMI 2.0 FMUs match their references" in proc.stdout
 
 

@@ -13,7 +13,7 @@ from sewfmu.components.punch_contact import PunchContactParams
 from sewfmu.scenarios import punch_monolithic
 from sewfmu.scenarios.cli import main
 from sewfmu.scenarios.loader import load, resolve
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import monolithic_summary, run_scenario, summarize
 
 

@@ -14,11 +14,18 @@ from hypothesis import strategies as st
 from sewfmu.components.build import PACKAGE_DIR, build_fmu
 from sewfmu.components.punch_contact import GRAVITY, PunchContact, PunchContactParams
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.fixed_step import JacobiMaster
+from sewfmu.scenarios.fmi_calls import CosimError
 from sewfmu.scenarios.format import ScenarioError
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import CosimError
+from sewfmu.scenarios.master import Master
 from tests.fmu_host import Host
+
+
+def _jacobi(sc):
+    """The scenario run by the Jacobi master (punch_split's own is the adaptive one)."""
+    sc.master = "jacobi"
+    return sc
+
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -90,16 +97,16 @@ def test_an_fmu_failing_mid_run_stops_cleanly_with_time_and_log_line(fmu_paths):
     sc.set_value("experiment.stop_time", 3.0)
     sc.set_value("experiment.step", 0.5)
     with pytest.raises(ScenarioError, match="outside the range"):
-        JacobiMaster(sc, fmu_paths).run()
-    import sewfmu.scenarios.master as master_module
-    master = JacobiMaster(sc, fmu_paths)
-    master_module_check = master_module.check_parameters
-    master_module.check_parameters = lambda *args: None
+        Master(_jacobi(sc), fmu_paths).run()
+    import sewfmu.scenarios.system as system_module
+    master = Master(_jacobi(sc), fmu_paths)
+    system_module_check = system_module.check_parameters
+    system_module.check_parameters = lambda *args: None
     try:
         with pytest.raises(CosimError) as err:
             master.run()
     finally:
-        master_module.check_parameters = master_module_check
+        system_module.check_parameters = system_module_check
     text = str(err.value)
     assert text.startswith("linkage failed during step from t = "), text
     assert "output xi_ddot is nan at t = 0.5 s" in text
@@ -121,7 +128,7 @@ def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, o
     sc.set_value("experiment.revolutions", 2)
     for name, value in overrides.items():
         sc.set_value(name, value)
-    with JacobiMaster(sc, fmu_paths) as master:
+    with Master(_jacobi(sc), fmu_paths) as master:
         for _ in range(master.n_steps // 8):           # a quarter revolution
             master.step()
         saved = master.save_state()
@@ -148,17 +155,20 @@ def test_every_fmu_state_survives_serialization(fmu_paths):
         sc.set_value("experiment.revolutions", 1)
         for name, value in overrides.items():
             sc.set_value(name, value)
-        with JacobiMaster(sc, fmu_paths) as master:
+        with Master(_jacobi(sc), fmu_paths) as master:
             for _ in range(master.n_steps // 4):                # on the stop, with ON_STOP
                 master.step()
-            blobs = [u.fmu.serializeFMUstate(u.fmu.getFMUstate()) for u in master.instances]
-            inputs = [list(u.in_buf) for u in master.instances]
-            k, row = master.k, master._row
+            snapshot = master.save_state()
+            blobs = [u.fmu.serializeFMUstate(slot)
+                     for u, slot in zip(master.instances, snapshot.states.slots)]
             for _ in range(master.n_steps // 4):
                 master.step()
             first = master.result()
-            master.restore_state((k, row, [u.fmu.deSerializeFMUstate(b)
-                                           for u, b in zip(master.instances, blobs)], inputs))
+            for u, slot in zip(master.instances, snapshot.states.slots):   # forget the states
+                u.free_state(slot)
+            snapshot.states.slots[:] = [u.fmu.deSerializeFMUstate(b)
+                                        for u, b in zip(master.instances, blobs)]
+            master.restore_state(snapshot)
             for _ in range(master.n_steps // 4):
                 master.step()
             second = master.result()
@@ -223,7 +233,7 @@ def test_memory_stays_flat_over_a_long_run(fmu_paths):
     sc = load("punch_drive")
     sc.set_value("experiment.revolutions", 200)
     sc.set_value("experiment.record_every", 1000)
-    with JacobiMaster(sc, fmu_paths) as master:
+    with Master(_jacobi(sc), fmu_paths) as master:
         samples = []
         for k in range(50_000):
             master.step()

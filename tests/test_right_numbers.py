@@ -18,7 +18,7 @@ from sewfmu.scenarios.cli import explain, main
 from sewfmu.scenarios.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.format import ScenarioError
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import run_scenario, summarize
 from tests.fmu_host import Host
 

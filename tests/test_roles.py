@@ -100,7 +100,7 @@ def test_every_mechanism_is_declared_once_in_its_analysis_module():
     import re
     from pathlib import Path
 
-    from sewfmu.components.catalogue import FMUS
+    from sewfmu.components.registry import FMUS
     from sewfmu.scenarios import analyses
 
     found = analyses.mechanisms()

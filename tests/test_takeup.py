@@ -10,7 +10,7 @@ from sewfmu.components.kinematics import AssemblyError, point_on_link
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
 from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
 from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.masters import run
+from sewfmu.scenarios.master import run
 from sewfmu.scenarios.runner import summarize
 from sewfmu.scenarios.sampling import sampled
 

@@ -1,6 +1,7 @@
 """The analyses: one module per mechanism, each declaring what sewfmu knows of it in one
 `MECHANISM` descriptor: the roles its scenarios bind, its key figures with their units, the
-animation that draws it, whether the monolithic solution solves it, its studies. Everything that
+animation that draws it, whether the monolithic solution solves it, its studies, the regression
+cases of its FMUs. Everything that
 lists mechanisms (scenario binding, summaries, sweeps, reports, animations, studies, the SSP
 import's guess of an analysis) reads the descriptors found here; a new mechanism's module in
 this folder is found without being listed anywhere.
@@ -34,6 +35,26 @@ class Study:
 
 
 @dataclass(frozen=True)
+class RegressionCase:
+    """How one FMU runs alone for its regression reference (scenarios/regression.py): until
+    `stop` at communication steps of `step`, its inputs `inputs(t)` (name -> array over the
+    time grid t; None for an FMU without inputs), compared within `rel_tol`. The inputs come
+    from the models of what drives the FMU in a machine, so that it works where it works hard."""
+    stop: float
+    step: float
+    inputs: Callable[[object], dict] | None = None
+    rel_tol: float = 1e-9
+
+
+def shaft_at(omega: float) -> Callable[[object], dict]:
+    """The inputs a linkage takes from a shaft turning at a constant omega [rad/s]."""
+    import numpy as np
+
+    return lambda t: {"phi": omega * t, "omega": np.full_like(t, omega),
+                      "epsilon": np.zeros_like(t)}
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """What sewfmu knows of one mechanism's analysis (declared in its module as MECHANISM)."""
     roles: dict[str, str]                  # role -> the FMU type that plays it
@@ -41,6 +62,9 @@ class Mechanism:
     animation: str | None = None           # the module of scenarios/animations that draws it
     monolithic: bool = False               # solved as one ODE by scenarios/punch_monolithic.py
     studies: dict[str, Study] = field(default_factory=dict)
+    # FMU type -> its regression case, for the FMUs this mechanism brings (the shared MainShaft's
+    # is scenarios/regression.py's)
+    regression: dict[str, RegressionCase] = field(default_factory=dict)
 
 
 @functools.cache

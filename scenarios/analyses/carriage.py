@@ -18,7 +18,7 @@ from ...components.carriage import CarriageDrive, CarriageModal, CarriageParams
 from ...components.oscillator import DampedOscillator
 from ...components.parameters import with_values
 from ..sampling import sampled
-from . import Mechanism, Study, column, last_revolution, parameters
+from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"omega1": "rad/s", "omega2": "rad/s", "stitch_rate_per_min": "1/min",
@@ -152,9 +152,20 @@ def plot_resonance(study: dict, path) -> None:
     plt.close(fig)
 
 
+def base_motion(t) -> dict:
+    """The drive's start-stop acceleration of the carriage's base at 1600 stitches/min (the
+    modal model's regression input)."""
+    omega = 1600 * 2 * math.pi / 60
+    _, _, a, jerk = sampled(CarriageDrive().motion, omega * t, omega, 0.0)
+    return {"a_base": a, "a_base_dot": jerk}
+
+
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "drive": "CarriageDrive", "carriage": "CarriageModal"},
     figures=FIGURES, animation="carriage",
+    regression={"CarriageDrive": RegressionCase(2 * math.pi / 167.55160819145564, 1e-4,
+                                                shaft_at(167.55160819145564)),
+                "CarriageModal": RegressionCase(3 * 60 / 1600, 1e-4, base_motion)},
     studies={"carriage_resonance": Study(
         "Carriage: steady-state peak tip deflection |U2| for 600 to 2000 stitches/min, the "
         "paper's carriage and its two remedies", resonance_study, plot_resonance,

@@ -17,7 +17,7 @@ from ...components.feed import FeedLinkage, FeedParams
 from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
 from ..sampling import sampled
-from . import Mechanism, Study, column, last_revolution, parameters
+from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "deg",
@@ -162,6 +162,7 @@ def _headline(study: dict) -> dict:
 
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "feed": "FeedLinkage"}, figures=FIGURES, animation="feed",
+    regression={"FeedLinkage": RegressionCase(2 * math.pi / 303.5, 5e-5, shaft_at(303.5))},
     studies={"feed_ratio": Study(
         "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
         "branches' rod-length ratio l2/l8 from 0.7 to 1.7", ratio_study, plot_study, _headline,

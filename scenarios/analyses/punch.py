@@ -12,9 +12,12 @@ communication points and for the monolithic reference's dense samples:
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from . import Mechanism, column, last_revolution, whole_revolution
+from ..sampling import sampled
+from . import Mechanism, RegressionCase, column, last_revolution, shaft_at, whole_revolution
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"contact_onset_deg": "deg", "contact_loss_deg": "deg", "contact_duration_deg": "deg",
@@ -147,6 +150,16 @@ def plot(curves, path, title: str) -> None:
     plt.close(fig)
 
 
+def excitation(t) -> dict:
+    """The six-bar's excitation of the punch at ω = 200 s⁻¹ (its regression input)."""
+    from ...components.punch_linkage import PunchLinkage
+
+    e = sampled(PunchLinkage().motion, 200.0 * t, 200.0, 0.0)
+    return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}
+
+
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "linkage": "PunchLinkage", "punch": "PunchContact"},
-    figures=FIGURES, animation="punch", monolithic=True)
+    figures=FIGURES, animation="punch", monolithic=True,
+    regression={"PunchLinkage": RegressionCase(2 * math.pi / 100, 2.5e-4, shaft_at(100.0)),
+                "PunchContact": RegressionCase(4 * math.pi / 200, 2.5e-4, excitation)})

@@ -15,7 +15,7 @@ from ...components.kinematics import AssemblyError
 from ...components.parameters import with_values
 from ...components.takeup import TakeupLinkage, TakeupParams
 from ..sampling import sampled
-from . import Mechanism, Study, column, last_revolution, parameters
+from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"path_extent_z_mm": "mm", "path_extent_x_mm": "mm", "stroke_mm": "mm",
@@ -222,8 +222,13 @@ def plot_tolerance(study: dict, path) -> None:
     plt.close(fig)
 
 
+REGRESSION_SPEED = 523.5987755982989      # rad/s: 5000 rpm, one revolution for its reference
+
+
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "takeup": "TakeupLinkage"}, figures=FIGURES, animation="takeup",
+    regression={"TakeupLinkage": RegressionCase(2 * math.pi / REGRESSION_SPEED, 2e-5,
+                                                shaft_at(REGRESSION_SPEED))},
     studies={"takeup_tolerance": Study(
         "Thread take-up: E's path with link lengths off by ±0.1 mm, and the stroke against the "
         "eccentric-pin adjustment of L_CD (±1 mm)", tolerance_study, plot_tolerance,

@@ -1,0 +1,88 @@
+"""What an FMU on pythonfmu 0.7.0 or pythonfmu3 0.3.4 must do that the standard does not ask,
+in one place (the host side's counterpart is scenarios/pythonfmu_host.py; docs/fmi.md says why).
+
+- No exception may reach pythonfmu: it turns every one into Fatal and keeps the interpreter lock,
+  after which a host may call nothing, not even FreeInstance. The getters and setters below
+  answer every call, a wrong value reference with a log line; do_step returns False (Discard).
+- pythonfmu's own getters and setters check every variable's type on every call: these look the
+  getter up directly (the hot path of a co-simulation step).
+- sys.path: pythonfmu puts the instance's resources folder first at every instantiation and never
+  takes it out (forget_resources_path).
+"""
+from __future__ import annotations
+
+import math
+import sys
+from typing import Any, Callable
+
+
+class ExceptionFreeAccess:
+    """The get and set calls of an FMU's layer, answered without an exception (SewSlave's)."""
+
+    def get_reals(self, vrs) -> list[float]:
+        try:
+            return [float(self._real_getters[vr]()) for vr in vrs]
+        except Exception:                 # noqa: BLE001 - an unknown reference: answered below
+            return self.get_values(vrs, "Real")
+
+    def get_values(self, vrs, kind: str) -> list:
+        convert, missing = _CONVERT[kind]
+        return [self._get(vr, kind, convert, missing) for vr in vrs]
+
+    def _get(self, vr, kind, convert, missing):
+        if self._kinds.get(vr) != kind:
+            self._error_once(f"{self._call(kind, 0)}: no such variable (value reference {vr})")
+            return missing
+        try:
+            return convert(self._getters[vr]())
+        except Exception as err:          # noqa: BLE001
+            self._error_once(f"value reference {vr}: {describe(err)}")
+            return missing
+
+    def set_reals(self, vrs, values) -> None:
+        try:
+            setters = [self._real_setters[vr] for vr in vrs]
+        except (KeyError, TypeError):     # not a settable Real: answered below
+            self.set_values(vrs, values, "Real")
+            return
+        for set_value, value in zip(setters, values):
+            set_value(value)
+
+    def set_values(self, vrs, values, kind: str) -> None:
+        for vr, value in zip(vrs, values):
+            setter = self._setters.get(vr)
+            if setter is None or self._kinds.get(vr) != kind:
+                name = self._names.get(vr, f"value reference {vr}")
+                self._error(f"{self._call(kind, 1)}: {name} cannot be set this way "
+                            f"(value {value!r} ignored)")
+                continue
+            setter(value)
+
+    def _call(self, kind: str, which: int) -> str:
+        return type(self).call_names.get(kind, ("Get", "Set"))[which]
+
+
+# kind -> (conversion of a got value, the answer for a reference of another kind)
+_CONVERT: dict[str, tuple[Callable[[Any], Any], Any]] = {
+    "Real": (float, math.nan), "Integer": (int, 0), "Boolean": (bool, False), "String": (str, ""),
+    "Int64": (int, 0), "UInt64": (int, 0),             # FMI 3.0 kinds no sewfmu variable has
+}
+
+
+def describe(err: Exception) -> str:
+    """An exception as the one line a log needs: the model's own message, or what kind of
+    failure it was."""
+    text = str(err)
+    # the models' own exceptions (parameters, assembly, step too long, chatter) say it for users
+    if type(err).__module__.rpartition(".")[0] == __name__.rpartition(".")[0] and text:
+        return text
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def forget_resources_path(resources: str | None) -> None:
+    """pythonfmu puts the instance's resources folder first on sys.path at every instantiation
+    (to import the FMU's script) and never takes it out: sys.path would grow with every instance,
+    and the host's later imports would find the FMU's copies first. The FMU's modules are
+    imported by now, so the entry is removed again."""
+    if resources and resources in sys.path:
+        sys.path.remove(resources)

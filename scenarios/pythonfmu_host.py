@@ -1,0 +1,54 @@
+"""What a Python host must do around pythonfmu's and pythonfmu3's binaries, in one place (the FMU
+side's counterpart is components/pythonfmu_quirks.py; docs/fmi.md says why, for other hosts).
+
+- Exit: pythonfmu 0.7.0 keeps its interpreter state in a static shared_ptr, which the C++ exit
+  handlers destroy, and which the library's unload function (finalizePythonInterpreter) releases
+  once more when the process exits after them: a write into freed memory that aborts the process
+  at exit ("corrupted double-linked list") or not, depending on the heap's layout (seen with four
+  FMU types and scipy loaded). Called first, at Python's exit, that function releases the state
+  while all is alive and leaves the static empty, so neither later step has anything to free;
+  then the library is unloaded.
+- sys.path: pythonfmu puts the FMU's resources folder first on sys.path at every instantiation
+  and leaves it there: later imports of this process would find the FMU's copies (its pythonfmu
+  lacks the binaries the builder needs) and sys.path would grow with every instance. The FMU has
+  imported its code by then, so sys.path is put back.
+"""
+from __future__ import annotations
+
+import atexit
+import contextlib
+import sys
+
+# Every FMU library this process loaded (one dlopen per instance), released at exit while the
+# interpreter is still alive (see above).
+_LIBRARIES: list = []
+
+
+def release_at_exit(fmu) -> None:
+    """Have the library of an fmpy FMU object released at Python's exit (see above)."""
+    _LIBRARIES.append(fmu.dll)
+
+
+@atexit.register
+def _release_libraries() -> None:
+    from fmpy import freeLibrary
+
+    while _LIBRARIES:
+        library = _LIBRARIES.pop()
+        try:
+            release_state = getattr(library, "finalizePythonInterpreter", None)
+            if release_state is not None:
+                release_state()
+            freeLibrary(library._handle)
+        except Exception:           # noqa: BLE001 - at exit, nothing to report to
+            pass
+
+
+@contextlib.contextmanager
+def sys_path_kept():
+    """Whatever an instantiation does to sys.path is undone (see above)."""
+    saved = list(sys.path)
+    try:
+        yield
+    finally:
+        sys.path[:] = saved

@@ -1,0 +1,99 @@
+"""The run's one recorder: the recorded outputs of every communication point kept, in a numpy
+array, within a share of the machine's memory.
+
+A fixed-step run knows its number of rows before it starts (and is refused up front, with the
+numbers, if they would not fit); an adaptive run does not, so its array grows as it goes, to at
+most the rows that fit. A rollback takes rows back (`truncate`).
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from .format import ScenarioError
+
+# the records of one run may take this share of the memory available when it starts, and
+# never more than RECORD_BUDGET (records beyond it are for a file, not for memory)
+MEMORY_SHARE = 0.25
+RECORD_BUDGET = 1 << 30
+GROWN_ROWS = 4096          # the first size of a growing record
+
+
+def _available_memory() -> int:
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+def _budget() -> float:
+    return min(RECORD_BUDGET, MEMORY_SHARE * _available_memory())
+
+
+def max_rows(columns: int) -> int:
+    """The most records of `columns` columns a run may keep."""
+    return int(_budget() / ((columns + 1) * 8))
+
+
+def check_memory(rows: int, columns: int, source: str, what: str = "records") -> None:
+    """Refuse, up front and with the numbers, a run whose records would not fit in memory."""
+    need = rows * (columns + 1) * 8
+    if need > _budget():
+        every = math.ceil(need / _budget())
+        raise ScenarioError(f"{source}: the {what} would take {need / 2**30:.3g} GiB ({rows:,} "
+                            f"points × {columns + 1} columns), more than the "
+                            f"{_budget() / 2**30:.3g} GiB a run may keep: record fewer "
+                            f"points (experiment.record_every = {every} or more; the key "
+                            f"figures are read from every step of the last revolution all the "
+                            f"same), record fewer columns, or take a longer step")
+
+
+class Recorder:
+    """Rows of (time, the planned columns), read from the instances' output buffers.
+
+    `plan` is a list of (instance, "real" or "bool", index in that instance's buffer), one per
+    column. `rows`: the number of rows the run will record, or None to grow as needed."""
+
+    def __init__(self, columns: list[str], plan: list, rows: int | None, source: str):
+        self.columns = columns
+        self.plan = plan
+        self.source = source
+        self.limit = max_rows(len(columns))
+        if rows is not None:
+            check_memory(rows, len(columns), source)
+        self.grows = rows is None
+        size = min(GROWN_ROWS, self.limit) if rows is None else rows
+        self.times = np.empty(size)
+        self.data = np.empty((size, len(columns)))
+        self.length = 0
+
+    def record(self, t: float) -> None:
+        row = self.length
+        if row == len(self.times):
+            self._grow(t)
+        self.times[row] = t
+        out = self.data[row]
+        for j, (inst, kind, idx) in enumerate(self.plan):
+            out[j] = inst.out_buf[idx] if kind == "real" else inst.bool_buf[idx]
+        self.length = row + 1
+
+    def _grow(self, t: float) -> None:
+        if not self.grows or self.length >= self.limit:
+            raise ScenarioError(f"{self.source}: the records reached {self.length:,} points at "
+                                f"t = {t:g} s, the most this machine's memory holds: set "
+                                f"experiment.record_every, or a looser tolerance")
+        size = min(self.limit, 2 * len(self.times))
+        self.times = np.resize(self.times, size)
+        self.data = np.resize(self.data, (size, len(self.columns)))
+
+    def truncate(self, length: int) -> None:
+        """Forget the rows from `length` on (a rollback to the point they were at)."""
+        self.length = length
+
+    def arrays(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """(time, {column: values}), copies of the rows recorded."""
+        rows = slice(0, self.length)
+        return (self.times[rows].copy(),
+                {c: self.data[rows, j].copy() for j, c in enumerate(self.columns)})
