@@ -21,14 +21,14 @@ from sewfmu.scenarios.instances import open_instance
 def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str]:
     """A fresh instance, `values` set during initialization, one doStep(0, h), timed."""
     log = LogCollector()
-    unit = open_instance(name, path, log)
-    unit.prepare()
-    unit.instantiate()
-    fmu = unit.fmu
-    unit.enter_initialization(stop=h)
+    instance = open_instance(name, path, log)
+    instance.prepare()
+    instance.instantiate()
+    fmu = instance.fmu
+    instance.enter_initialization(stop=h)
     for key, value in values.items():
-        unit.set_parameter(unit.variables[key], value)
-    unit.exit_initialization()
+        instance.set_parameter(instance.variables[key], value)
+    instance.exit_initialization()
     started = time.perf_counter()
     try:
         fmu.doStep(0.0, h)
@@ -37,7 +37,7 @@ def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str
         status = "Discard"
     wall = time.perf_counter() - started
     reason = log.lines[-1].split(": ", 1)[-1] if status != "OK" else ""
-    unit.release()
+    instance.release()
     return status, wall, reason
 
 

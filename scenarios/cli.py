@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from .._version import __version__
-from .format import ScenarioError, label_of, parse_value
 from .interrupt import Interrupted, interrupt_on_sigterm
 from .loader import catalogue, load
+from .values import ScenarioError, label_of, parse_value
 
 
 def _load_with_sets(name: str, sets: list[str]):

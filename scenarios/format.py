@@ -38,7 +38,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,14 +45,11 @@ from typing import Any
 from ..components.registry import FMI_VERSIONS, FMUS, parameter_units
 from .algorithm_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from .experiment import EXPERIMENT_KEYS
+from .values import ScenarioError, check_instance_name, did_you_mean, label_of, positive, seconds, short
 
 # the masters and their settings (defaults, the tolerances each honours): one class per master in
 # scenarios/algorithm_settings.py
 MASTERS = MASTER_NAMES
-
-
-class ScenarioError(ValueError):
-    """A scenario that cannot run, with the file and key it comes from."""
 
 
 @dataclass(frozen=True)
@@ -204,7 +200,7 @@ class Scenario:
         if not finite:
             raise ScenarioError(f"{origin} {target}: parameter {key} must be a finite number "
                                 f"within the range of a float (about ±1.8e308), got "
-                                f"{_short(value)}")
+                                f"{short(value)}")
         self.instances[inst].parameters[key] = value
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
@@ -231,7 +227,7 @@ class Scenario:
             setattr(self, key, value)
             return
         if key == "tolerance":
-            self.tolerance = _positive(value, f"{origin} experiment.tolerance")
+            self.tolerance = positive(value, f"{origin} experiment.tolerance")
             self.tolerance_master = None          # given with --set: for whichever master runs
             return
         if key == "fmi":
@@ -258,25 +254,12 @@ class Scenario:
                                 f"{did_you_mean(key, EXPERIMENT_KEYS)} "
                                 f"({', '.join(EXPERIMENT_KEYS)})")
         where = f"{origin} experiment.{key}"
-        number = _seconds(value, where) if key in ("step", "stop_time") else _positive(value, where)
+        number = seconds(value, where) if key in ("step", "stop_time") else positive(value, where)
         setattr(self, key, number)
         if key == "stop_time":
             self.revolutions = None
         elif key == "revolutions":
             self.stop_time = None
-
-
-def check_instance_name(name: str) -> None:
-    """An instance name becomes part of column names (instance.variable) and of folder names
-    (`instance.parameter=value`): a letter or '_' first, then letters, digits, '_' or '-', at
-    most 64 characters, and not 'experiment'. Raises ValueError saying so."""
-    # letters of any script: an engineer may name the instances in the machine shop's language
-    if not isinstance(name, str) or not 0 < len(name) <= 64 or name == "experiment" \
-            or not (name[0].isalpha() or name[0] == "_") \
-            or not all(ch.isalnum() or ch in "_-" for ch in name):
-        raise ValueError(f"an instance name starts with a letter or '_' and holds only letters, "
-                         f"digits, '_' and '-' (no '.', path separators or spaces; at most 64; "
-                         f"not 'experiment'), got {name!r}")
 
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:
@@ -286,60 +269,6 @@ def _declared_units(fmu_file: Path) -> dict[str, str]:
     md = read_model_description(str(fmu_file))
     return {v.name: v.unit or "" for v in md.modelVariables
             if v.causality in ("parameter", "input")}
-
-
-def did_you_mean(name: str, known) -> str:
-    """ "; did you mean 'x'?" for the closest known name, or nothing."""
-    import difflib
-
-    close = difflib.get_close_matches(name, list(known), n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
-
-
-def label_of(target: str, value: Any) -> str:
-    """`instance.parameter=value` as a short label (a folder name, a legend)."""
-    if isinstance(value, float):
-        return f"{target}={value:g}"
-    return f"{target}={value}"
-
-
-def _short(value: Any) -> str:
-    """A value for a message: huge integers cut to their first and last digits."""
-    text = repr(value)
-    return text if len(text) <= 40 else f"{text[:12]}...{text[-6:]} ({len(text)} digits)"
-
-
-def _positive(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError(f"{where}: must be a number, got {_short(value)}")
-    try:
-        number = float(value)
-    except OverflowError:
-        number = math.inf
-    if not math.isfinite(number) or number <= 0:
-        raise ScenarioError(f"{where}: must be a positive finite number, got {_short(value)}")
-    return number
-
-
-def _seconds(value: Any, where: str) -> float:
-    """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
-    if isinstance(value, str):
-        from ..components.units import UnitError, in_unit
-        try:
-            value = in_unit(value, "s")
-        except UnitError as err:
-            raise ScenarioError(f"{where}: {err}") from None
-    return _positive(value, where)
-
-
-def parse_value(text: str, where: str) -> Any:
-    """A --set value: a TOML scalar (number or string)."""
-    try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        if text.lower() in ("nan", "+nan", "-nan", "inf", "+inf", "-inf"):
-            return float(text)
-        return text           # a bare word: let the caller say what it expected
 
 
 def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
@@ -411,11 +340,11 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     scenario = Scenario(
         name=name, source=source, description=str(data.get("description", "")),
         analysis=data.get("analysis"), instances=instances, connections=[],
-        record=data.get("record"), step=_seconds(exp["step"], f"{source}: experiment.step"),
+        record=data.get("record"), step=seconds(exp["step"], f"{source}: experiment.step"),
         master=master,
-        stop_time=(_seconds(exp["stop_time"], f"{source}: experiment.stop_time")
+        stop_time=(seconds(exp["stop_time"], f"{source}: experiment.stop_time")
                    if "stop_time" in exp else None),
-        revolutions=(_positive(exp["revolutions"], f"{source}: experiment.revolutions")
+        revolutions=(positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
     for key in ("record_every", "tolerance", "acceleration", "fmi"):

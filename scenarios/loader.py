@@ -8,8 +8,9 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-from .format import Scenario, ScenarioError, did_you_mean, from_dict
+from .format import Scenario, from_dict
 from .ssp_import import load_ssp
+from .values import ScenarioError, did_you_mean
 
 
 def catalogue() -> dict[str, Path]:

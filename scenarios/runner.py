@@ -14,9 +14,10 @@ import numpy as np
 from ..components.build import default_fmu_dir, ensure_built
 from . import analyses
 from .experiment import experiment_of
-from .format import Scenario, ScenarioError, label_of
+from .format import Scenario
 from .master import RunResult, run
 from .outputs import folder_for, replacing, write_atomic
+from .values import ScenarioError, label_of
 
 
 def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:

@@ -25,9 +25,11 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from .algorithm_settings import ACCELERATIONS, MASTER_NAMES
 from .experiment import EXPERIMENT_KEYS
-from .format import Connection, Instance, Scenario, ScenarioError, check_instance_name, check_one_source
+from .format import Connection, Instance, Scenario, check_one_source
 from .outputs import alive
+from .values import ScenarioError, check_instance_name
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -292,11 +294,9 @@ def _experiment(root: ET.Element) -> dict:
     """The experiment keys sewfmu's annotation carries (scenarios/experiment.py: step, master,
     tolerance, acceleration); where the file gives no step, 0 (the run then asks for --set
     experiment.step). A value that is not valid is left at its default."""
-    from .format import ACCELERATIONS, MASTERS
-
     found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken"}
     valid = {"step": float, "tolerance": float,
-             "master": lambda text: MASTERS[MASTERS.index(text)],
+             "master": lambda text: MASTER_NAMES[MASTER_NAMES.index(text)],
              "acceleration": lambda text: ACCELERATIONS[ACCELERATIONS.index(text)]}
     carried = [name for name, key in EXPERIMENT_KEYS.items() if key.in_ssp]
     for note in root.iter(_q(SSC, "Annotation")):

@@ -26,8 +26,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .experiment import experiment_of
-from .format import Scenario, ScenarioError, label_of, parse_value
+from .format import Scenario
 from .outputs import folder_for, remove_debris, write_atomic
+from .values import ScenarioError, label_of, parse_value
 
 POINTS_FILE = "points.jsonl"
 TABLE_FILE = "sweep.csv"

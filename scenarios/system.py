@@ -12,7 +12,8 @@ from typing import Callable
 
 from .divergence import bound_text, declared_bound
 from .fmi_calls import LogCollector, kind_of
-from .format import Scenario, ScenarioError, did_you_mean
+from .format import Scenario
+from .values import ScenarioError, did_you_mean
 
 
 class InputLeftOpen(UserWarning):

@@ -241,7 +241,7 @@ def build(fmi: int = 2, dest: str | Path | None = None,
     fmus/fmi3/); return their paths."""
     from .components.build import build_fmu, default_fmu_dir
     from .components.registry import FMUS
-    from .scenarios.format import did_you_mean
+    from .scenarios.values import did_you_mean
 
     if isinstance(fmi, bool) or fmi not in (2, 3):
         raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")

@@ -116,22 +116,22 @@ sys.path.insert(0, sys.argv[1])
 from pathlib import Path
 from sewfmu.scenarios.fmi_calls import LogCollector
 from sewfmu.scenarios.instances import open_instance
-units = []
+instances = []
 for path in sys.argv[2:]:
-    unit = open_instance("fmi", Path(path), LogCollector())
-    unit.name = unit.md.fmiVersion
-    unit.real_out = ["phi"]
-    unit.prepare(); unit.instantiate(); unit.enter_initialization(1.0)
-    unit.set_parameter(unit.variables["omega0"], 40.0)
-    unit.exit_initialization()
-    units.append(unit)
+    inst = open_instance("fmi", Path(path), LogCollector())
+    inst.name = inst.md.fmiVersion
+    inst.real_out = ["phi"]
+    inst.prepare(); inst.instantiate(); inst.enter_initialization(1.0)
+    inst.set_parameter(inst.variables["omega0"], 40.0)
+    inst.exit_initialization()
+    instances.append(inst)
 for k in range(10):
-    for unit in units:
-        unit.do_step(k * 0.01, 0.01)
-for unit in units:
-    unit.read_outputs()
-    print(unit.name, type(unit.fmu).__name__, unit.out_buf[0])
-    unit.release()
+    for inst in instances:
+        inst.do_step(k * 0.01, 0.01)
+for inst in instances:
+    inst.read_outputs()
+    print(inst.name, type(inst.fmu).__name__, inst.out_buf[0])
+    inst.release()
 print(sorted(m for m in sys.modules if m.startswith("sewfmu") and "MainShaft" in m))
 """
 

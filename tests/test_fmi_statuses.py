@@ -161,11 +161,11 @@ from pathlib import Path
 from sewfmu.scenarios.fmi_calls import LogCollector
 from sewfmu.scenarios.instances import open_instance
 log = LogCollector()
-unit = open_instance("cycle", Path(sys.argv[2]), log)       # FMI 2.0 or 3.0: one library object
-unit.prepare()
+inst = open_instance("cycle", Path(sys.argv[2]), log)       # FMI 2.0 or 3.0: one library object
+inst.prepare()
 def cycle():
-    unit.instantiate(); unit.enter_initialization(1.0); unit.exit_initialization()
-    unit.do_step(0.0, 1e-4); unit.release()
+    inst.instantiate(); inst.enter_initialization(1.0); inst.exit_initialization()
+    inst.do_step(0.0, 1e-4); inst.release()
 for _ in range(20):
     cycle()
 log.lines.clear(); gc.collect()

@@ -13,9 +13,10 @@ from PIL import Image
 from sewfmu.components.feed import FeedLinkage
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.takeup import TakeupLinkage
+from sewfmu.scenarios.analyses import mechanism
 from sewfmu.scenarios.animations import FRAMES, animate
 from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.loader import load
+from sewfmu.scenarios.loader import catalogue, load
 from sewfmu.scenarios.runner import simulate
 
 pytestmark = [pytest.mark.slow]
@@ -54,8 +55,17 @@ def _red_centre(frame: Image.Image) -> tuple[float, float]:
     return float(cols.mean()), float(rows.mean())
 
 
-@pytest.mark.parametrize("name", ["punch_drive", "punch_split", "feed", "takeup",
-                                  "carriage_startstop"])
+def _one_scenario_per_animated_mechanism() -> list[str]:
+    """The first catalogue scenario of every mechanism whose descriptor names an animation."""
+    chosen = {}
+    for name in sorted(catalogue()):
+        analysis = load(name).analysis
+        if analysis and mechanism(analysis).animation and analysis not in chosen:
+            chosen[analysis] = name
+    return sorted(chosen.values())
+
+
+@pytest.mark.parametrize("name", _one_scenario_per_animated_mechanism())
 def test_the_animation_shows_the_recorded_run(tmp_path, name):
     result = simulate(load(name))
     anim = animate(result, tmp_path / f"{name}.gif")

@@ -121,7 +121,7 @@ def test_a_diverging_jacobi_run_is_stopped_and_named(fmu_paths, step):
     assert "experiment.step" in text and "iterative" in text
 
 
-class _FakeUnit:
+class _FakeInstance:
     """An FMU instance that declares no ranges, as an FMU of another tool may."""
 
     class _Var:
@@ -136,18 +136,18 @@ class _FakeUnit:
 
 
 def test_growth_without_declared_ranges_is_divergence_too():
-    unit = _FakeUnit("spring")
-    watch = DivergenceWatch([unit], 1e-3)
+    inst = _FakeInstance("spring")
+    watch = DivergenceWatch([inst], 1e-3)
     value, t = 1.0, 0.0
     with pytest.raises(Diverged, match="grew"):
         for k in range(10_000):
             value *= -1.2                  # the sign-alternating growth of an unstable coupling
-            unit.in_buf[0] = value
+            inst.in_buf[0] = value
             t += 1e-3
             watch.check(t)
-    steady = DivergenceWatch([unit], 1e-3)
+    steady = DivergenceWatch([inst], 1e-3)
     for k in range(10_000):                 # a bounded oscillation is physics, not divergence
-        unit.in_buf[0] = 25.0 * math.sin(0.3 * k)
+        inst.in_buf[0] = 25.0 * math.sin(0.3 * k)
         steady.check(k * 1e-3)
 
 

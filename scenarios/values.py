@@ -1,0 +1,81 @@
+"""The values a scenario is written with: the error every mistake raises, instance names
+checked, numbers and times read (a time may carry its unit), --set values parsed, labels and
+"did you mean" hints. The scenario format (scenarios/format.py) and everything that reads
+scenarios use these.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from typing import Any
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot run, with the file and key it comes from."""
+
+
+def check_instance_name(name: str) -> None:
+    """An instance name becomes part of column names (instance.variable) and of folder names
+    (`instance.parameter=value`): a letter or '_' first, then letters, digits, '_' or '-', at
+    most 64 characters, and not 'experiment'. Raises ValueError saying so."""
+    # letters of any script: an engineer may name the instances in the machine shop's language
+    if not isinstance(name, str) or not 0 < len(name) <= 64 or name == "experiment" \
+            or not (name[0].isalpha() or name[0] == "_") \
+            or not all(ch.isalnum() or ch in "_-" for ch in name):
+        raise ValueError(f"an instance name starts with a letter or '_' and holds only letters, "
+                         f"digits, '_' and '-' (no '.', path separators or spaces; at most 64; "
+                         f"not 'experiment'), got {name!r}")
+
+
+def did_you_mean(name: str, known) -> str:
+    """ "; did you mean 'x'?" for the closest known name, or nothing."""
+    import difflib
+
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def label_of(target: str, value: Any) -> str:
+    """`instance.parameter=value` as a short label (a folder name, a legend)."""
+    if isinstance(value, float):
+        return f"{target}={value:g}"
+    return f"{target}={value}"
+
+
+def short(value: Any) -> str:
+    """A value for a message: huge integers cut to their first and last digits."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:12]}...{text[-6:]} ({len(text)} digits)"
+
+
+def positive(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where}: must be a number, got {short(value)}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number) or number <= 0:
+        raise ScenarioError(f"{where}: must be a positive finite number, got {short(value)}")
+    return number
+
+
+def seconds(value: Any, where: str) -> float:
+    """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
+    if isinstance(value, str):
+        from ..components.units import UnitError, in_unit
+        try:
+            value = in_unit(value, "s")
+        except UnitError as err:
+            raise ScenarioError(f"{where}: {err}") from None
+    return positive(value, where)
+
+
+def parse_value(text: str, where: str) -> Any:
+    """A --set value: a TOML scalar (number or string)."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        if text.lower() in ("nan", "+nan", "-nan", "inf", "+inf", "-inf"):
+            return float(text)
+        return text           # a bare word: let the caller say what it expected
