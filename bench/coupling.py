@@ -91,7 +91,7 @@ def main():
     own = load("punch_split")
     split_errors = errors(summarize(simulate(own)), tight)
     print(f"- punch_split with its own master ({own.master}, tolerance "
-          f"{own.coupling_tolerance():g}): {median['split']:.3f} s, "
+          f"{own.settings().tolerance:g}): {median['split']:.3f} s, "
           f"{median['split'] / median['drive']:.2f} x punch_drive with jacobi "
           f"({median['drive']:.3f} s; goal <= 2); errors "
           + ", ".join(f"{k} {v:.2g}" for k, v in split_errors.items())
