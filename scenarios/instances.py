@@ -10,21 +10,20 @@ plain Python instance behind the same interface (tests/fake_fmu.py).
 """
 from __future__ import annotations
 
-import atexit
 import ctypes
 import math
-import shutil
 from functools import partial
 from pathlib import Path
 
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2Real, fmi2ValueReference
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
 from .fmi_calls import FmiCallError, LogCollector, Status, failed, kind_of
+from .fmu_cache import extract_cached, is_cached
 from .format import ScenarioError
-from .pythonfmu_host import release_at_exit, sys_path_kept
+from .pythonfmu_host import instantiating, release_at_exit
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Instance.release), so it is loaded from one place only.
@@ -32,14 +31,36 @@ _EXTRACTED: dict[tuple, tuple[str, object]] = {}
 
 
 def extracted_fmu(path: Path) -> tuple[str, object]:
-    """(unzip folder, model description) of an FMU file, extracted once per process."""
+    """(unzip folder, model description) of an FMU file, extracted once (scenarios/fmu_cache.py:
+    kept between processes too)."""
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
     if key not in _EXTRACTED:
-        unzip_dir = extract(str(path))
-        atexit.register(shutil.rmtree, unzip_dir, True)
+        unzip_dir = extract_cached(path)
         _EXTRACTED[key] = (unzip_dir, read_model_description(str(path)))
     return _EXTRACTED[key]
+
+
+# Idle fmpy FMU objects, by unzip folder: a released instance hands its object back and the next
+# instance of that FMU takes it. So the library is loaded, and fmpy binds its functions, once per
+# FMU and concurrent instance rather than once per instance, and a process that runs thousands of
+# sweep points keeps a flat memory (every library object stays referenced until exit: see
+# pythonfmu_host.py). FMI allows a new instantiation from a library whose instance was freed.
+_IDLE: dict[str, list] = {}
+
+
+def _loaded_fmu(cls, unzip_dir: str, md, name: str):
+    """An fmpy FMU object of this FMU, named `name`: an idle one, or a newly loaded one."""
+    idle = _IDLE.get(unzip_dir)
+    while idle:
+        fmu = idle.pop()
+        if type(fmu) is cls:
+            fmu.instanceName = name
+            return fmu
+    fmu = cls(guid=md.guid, unzipDirectory=unzip_dir,
+              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+    release_at_exit(fmu)
+    return fmu
 
 
 def open_instance(name: str, path: Path, log: LogCollector) -> "Instance":
@@ -104,8 +125,11 @@ class Instance:
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
 
     # --- the life of the instance: the FMI calls -----------------------------------------------
+    # the instance's code lives in sewfmu's cache of extracted FMUs: keep its bytecode there
+    cached = False
+
     def instantiate(self) -> None:
-        with sys_path_kept():
+        with instantiating(keep_bytecode=self.cached):
             self._instantiate()
         self.instantiated = True
         self.bind()
@@ -229,10 +253,9 @@ class Fmi2Instance(Instance):
 
     def __init__(self, name: str, unzip_dir: str, md, log: LogCollector):
         super().__init__(name, md, log)
-        self.fmu = self.FMU_CLASS(guid=md.guid, unzipDirectory=unzip_dir,
-                                  modelIdentifier=md.coSimulation.modelIdentifier,
-                                  instanceName=name)
-        release_at_exit(self.fmu)
+        self.unzip_dir = unzip_dir
+        self.cached = is_cached(unzip_dir)
+        self.fmu = _loaded_fmu(self.FMU_CLASS, unzip_dir, md, name)
 
     def _function(self, call: str):
         """The library's function (fmpy has given it its argument types when loading)."""
@@ -294,6 +317,8 @@ class Fmi2Instance(Instance):
         except Exception:
             pass
         self._function("free")(self.fmu.component)
+        self.fmu.component = None
+        _IDLE.setdefault(self.unzip_dir, []).append(self.fmu)     # for the next instance
 
     def get_state(self, slot) -> int:
         if slot:

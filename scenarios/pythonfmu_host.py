@@ -45,10 +45,16 @@ def _release_libraries() -> None:
 
 
 @contextlib.contextmanager
-def sys_path_kept():
-    """Whatever an instantiation does to sys.path is undone (see above)."""
-    saved = list(sys.path)
+def instantiating(keep_bytecode: bool = False):
+    """Around an instantiation: whatever it does to sys.path is undone (see above); with
+    `keep_bytecode` (an FMU extracted into sewfmu's cache, scenarios/fmu_cache.py) the code it
+    imports leaves its bytecode there even where PYTHONDONTWRITEBYTECODE is set, so that the next
+    run, in any process, does not compile it again."""
+    saved, writes = list(sys.path), sys.dont_write_bytecode
+    if keep_bytecode:
+        sys.dont_write_bytecode = False
     try:
         yield
     finally:
         sys.path[:] = saved
+        sys.dont_write_bytecode = writes

@@ -1,7 +1,10 @@
 """Shared fixtures: the FMUs built once per test session into a temporary folder, FMI 2.0
 (`fmu_paths`) and FMI 3.0 (`fmu3_paths`); `fmus` gives each in turn, for the tests
 of the FMUs themselves."""
+import atexit
 import os
+import shutil
+import tempfile
 
 import pytest
 from hypothesis import settings
@@ -13,6 +16,12 @@ from sewfmu.components.build import build_all, default_fmu_dir
 settings.register_profile("ci", max_examples=25, derandomize=True, database=None, deadline=None)
 settings.register_profile("explore", max_examples=1000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+# the FMUs the tests build are extracted into a cache of this session's (scenarios/fmu_cache.py),
+# not the user's: every build is a new file, and would stay there for weeks
+if "SEWFMU_CACHE_DIR" not in os.environ:
+    os.environ["SEWFMU_CACHE_DIR"] = tempfile.mkdtemp(prefix="sewfmu_test_cache_")
+    atexit.register(shutil.rmtree, os.environ["SEWFMU_CACHE_DIR"], True)
 
 
 @pytest.fixture(scope="session")
