@@ -13,6 +13,7 @@ descent to psi_m, a dwell, a cycloidal return and rest at the top.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -74,11 +75,7 @@ class PunchLinkage:
         validate(params)
         self.p = params
         if params.mode == SIX_BAR:
-            heights = check_assembly(lambda alpha: self.slider(alpha, 0.0, 0.0).y,
-                                     "punch six-bar", params, "crank angle alpha",
-                                     _ASSEMBLY_SAMPLES)
-            self.alpha0 = self._crank_angle_of_top(heights)
-            self.y_top = self.slider(self.alpha0, 0.0, 0.0).y
+            self.alpha0, self.y_top = _top_of(params)
         else:
             if params.phi_descent + params.phi_dwell + params.phi_return > 2 * math.pi + 1e-12:
                 raise ParameterError("phi_return", "phi_descent + phi_dwell + phi_return must not "
@@ -104,6 +101,14 @@ class PunchLinkage:
     def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
         """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
         return self.joints(alpha, alpha_rate, alpha_accel)["D"]
+
+    def _top(self) -> tuple[float, float]:
+        """(crank angle, slider height) of the slider's highest point, after checking that the
+        six-bar assembles over the whole turn (AssemblyError naming the crank angle if not)."""
+        heights = check_assembly(lambda alpha: self.slider(alpha, 0.0, 0.0).y, "punch six-bar",
+                                 self.p, "crank angle alpha", _ASSEMBLY_SAMPLES)
+        alpha0 = self._crank_angle_of_top(heights)
+        return alpha0, self.slider(alpha0, 0.0, 0.0).y
 
     def _crank_angle_of_top(self, heights: list[float]) -> float:
         """Crank angle of the slider's highest point: where dY_D/dalpha changes sign + to -
@@ -156,3 +161,14 @@ class PunchLinkage:
         psi, d1, d2 = self._required(phi)
         # xi = xi0 - psi(phi): chain rule with phi' = omega, phi'' = epsilon
         return Excitation(psi, self.p.xi0 - psi, -d1 * omega, -(d2 * omega ** 2 + d1 * epsilon))
+
+
+@functools.lru_cache(maxsize=64)
+def _top_of(params: PunchLinkageParams) -> tuple[float, float]:
+    """PunchLinkage._top for these parameters, worked out once per parameter set in a process
+    (3600 crank angles, about 36 ms): the instances of a sweep's points, the monolithic solution
+    and the plots share it. A pure function of frozen parameters, so instances stay independent;
+    a failure is not kept (each instance reports it)."""
+    bare = object.__new__(PunchLinkage)     # its kinematics need nothing but the parameters
+    bare.p = params
+    return bare._top()

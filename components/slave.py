@@ -250,6 +250,14 @@ class SewSlave(ExceptionFreeAccess):
         loop) so gets a zero-order hold of them, and a value set once stays where it was set;
         a host that gives the rates gets the Taylor extrapolation. A rate set again counts
         again; where the host set nothing (the FMU run alone), the start values stand."""
+        held = self._note_held_rates()
+        if not held:
+            return dict(self._inputs)
+        return {name: (0.0 if name in held else x) for name, x in self._inputs.items()}
+
+    def _note_held_rates(self) -> set[str]:
+        """Which rates act as zero, from what the host set since the last step (see
+        held_inputs)."""
         fresh, held = self._set_since_step, self._held
         for chain in type(self).taylor_inputs:
             for value, rate in zip(chain, chain[1:]):
@@ -257,14 +265,14 @@ class SewSlave(ExceptionFreeAccess):
                     held.discard(rate)
                 elif value in fresh or value in held:
                     held.add(rate)
-        if not held:
-            return dict(self._inputs)
-        return {name: (0.0 if name in held else x) for name, x in self._inputs.items()}
+        return held
 
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
         """Inputs extrapolated by dt from the instant they were set: each `taylor_inputs` chain
         (x, x', x'', ...) by its Taylor polynomial (the last derivative held), others held."""
         u = self.held_inputs()
+        if dt == 0.0:              # read at the instant the inputs were set: nothing to add
+            return u
         for chain in type(self).taylor_inputs:
             values = [u[name] for name in chain]
             for k, name in enumerate(chain[:-1]):
@@ -316,7 +324,7 @@ class SewSlave(ExceptionFreeAccess):
                 return False
         saved = (self.save_internal(), self._elapsed, self._time)
         try:
-            self.held_inputs()            # which rates act as zero, from what was set
+            self._note_held_rates()       # which rates act as zero, from what was set
             self.advance(self.model(), t, h)
             self._time = t + h
             self._elapsed += h

@@ -107,6 +107,11 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
     return points
 
 
+# what the worker processes' fork server imports once, so that no worker imports it again
+# (multiprocessing ignores a name it cannot import: tests/test_sweep.py imports them)
+WORKER_PRELOAD = ["sewfmu.scenarios.runner", "sewfmu.scenarios.master"]
+
+
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
     from .runner import simulate, summarize, write_csv
@@ -124,6 +129,12 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
         return failed_row(row, err)
     figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step", "units")}
     return {**row, "status": "ok", **figures}
+
+
+def run_points(scenario: Scenario, points: list[Point], keys: list[str],
+               results_dir: str | None = None) -> list[dict]:
+    """Several points, one after another (a Dask task): their rows."""
+    return [run_point(scenario, p, key, results_dir) for p, key in zip(points, keys)]
 
 
 def failed_row(row: dict, err: Exception) -> dict:
@@ -235,17 +246,25 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
     if scheduler:
         from distributed import Client, as_completed
         with Client(scheduler) as client:
-            futures = [client.submit(run_point, scenario, p, keys[p.index], results_dir,
-                                     pure=False) for p in todo]
+            # the scenario goes to every worker once, not with every point; the points go in
+            # batches, a few per worker slot, so that a point costs its run and not a task's
+            # round trip through the scheduler
+            shared = client.scatter(scenario, broadcast=True)
+            slots = max(1, sum(client.nthreads().values()))
+            size = max(1, min(8, len(todo) // (4 * slots)))
+            batches = [todo[k:k + size] for k in range(0, len(todo), size)]
+            futures = [client.submit(run_points, shared, batch,
+                                     [keys[p.index] for p in batch], results_dir, pure=False)
+                       for batch in batches]
             for future in as_completed(futures):
-                yield future.result()
+                yield from future.result()
         return
     from .workers import run_tasks
 
     by_key = {keys[p.index]: p for p in todo}
     tasks = [(keys[p.index], run_point, (scenario, p, keys[p.index], results_dir)) for p in todo]
     for key, answer in run_tasks(tasks, workers or os.cpu_count() or 1,
-                                 preload=["scenarios.runner"]):
+                                 preload=WORKER_PRELOAD):
         if isinstance(answer, Exception):      # the worker died, or run_point itself failed
             point = by_key[key]
             yield failed_row({"index": point.index, "key": key, **dict(point.values)}, answer)

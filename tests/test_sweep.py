@@ -67,3 +67,13 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path):
     for row in rows:
         assert row["status"] == "ok"
         assert (row["F2_weld_mean"] == -1.0) == (row["key"] in marked)
+
+
+def test_the_workers_preload_modules_that_exist():
+    """multiprocessing's fork server skips a preload it cannot import, silently: every worker
+    would then import sewfmu itself."""
+    import importlib
+
+    from sewfmu.scenarios.sweep import WORKER_PRELOAD
+    for name in WORKER_PRELOAD:
+        importlib.import_module(name)
