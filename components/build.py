@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.util
 import os
 import shutil
 import sys
@@ -30,6 +31,7 @@ import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
 from .._version import __version__
+from .carried_reference import carry, default_experiment_output
 from .registry import FMI_VERSIONS, FMUS
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -175,7 +177,7 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
         pkg_dir = tmp / package
         pkg_dir.mkdir()
         modules = sorted(p.stem for p in source.glob("*.py")
-                         if p.stem not in ("__init__", "build", other_layer))
+                         if p.stem not in ("__init__", "build", "carried_reference", other_layer))
         for mod in modules:
             shutil.copy2(source / f"{mod}.py", pkg_dir / f"{mod}.py")
         # Import every module with the package: a host that loads this FMU again from another
@@ -198,6 +200,11 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
             built = FmuBuilder.build_FMU(script, dest=tmp / "out", project_files=[pkg_dir],
                                          **options)
             built = tmp / "out" / f"{name}.fmu"
+            # the reference it carries (fmi-ls-ref): its default experiment, run with the code
+            # just copied into it (the builder has imported it)
+            copied = getattr(importlib.import_module(f"{package}.{module}"), slave)
+            layer = _module_of(package, "fmi2_layer", source).Fmi2Layer
+            carry(built, name, default_experiment_output(copied, layer))
             # replace atomically: another process may be reading the old FMU right now
             out = dest / f"{name}.fmu"
             staged = dest / f".{name}.fmu.{os.getpid()}"
@@ -210,6 +217,17 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
                         or m.startswith(package + ".")]:
                 del sys.modules[mod]
     return Path(out)
+
+
+def _module_of(package: str, module: str, source: Path):
+    """`package.module`, imported (from `source` if the package's copy lacks it: an FMI 3.0
+    FMU carries no FMI 2.0 layer)."""
+    name = f"{package}.{module}"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, Path(source) / f"{module}.py")
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    return sys.modules[name]
 
 
 def build_all(dest: Path | None = None, fmi: int = 2) -> list[Path]:

@@ -142,24 +142,60 @@ def cmd_export_ssp(args) -> None:
 
 
 def cmd_references(args) -> None:
+    if args.fmu:
+        return _references_of_files(args)
     from ..components.registry import FMUS
     from . import regression as references
     from .runner import fmus_for_names
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)
+    folder = Path(args.refs) if args.refs else references.REFERENCE_DIR
     if args.regenerate:
         if args.fmi != 2:
             raise ScenarioError("--regenerate: the references are made with the FMI 2.0 FMUs "
                                 "(the FMI 3.0 ones are checked against the same references)")
-        for folder in references.regenerate(paths):
-            print(f"wrote {folder}")
+        for written in references.regenerate(paths, folder):
+            print(f"wrote {written}")
         return
-    problems = [p for name in FMUS for p in references.check(name, paths[name])]
+    from .reference_check import tolerance
+    rtol, atol = tolerance(args.rtol, "--rtol"), tolerance(args.atol, "--atol")
+    problems = [p for name in FMUS for p in references.check(name, paths[name], folder, rtol, atol)]
     for line in problems:
         print(line)
     if problems:
         raise ScenarioError(f"{len(problems)} differences from the regression references")
     print(f"all {len(FMUS)} FMI {args.fmi}.0 FMUs match their references")
+
+
+def _references_of_files(args) -> None:
+    """`sewfmu references --fmu PATH ...`: any FMU against its references (reference_check.py)."""
+    from . import fmu_reference, reference_check
+
+    if args.regenerate:
+        if not args.refs:
+            raise ScenarioError("--regenerate with --fmu writes into --refs DIR (sewfmu's own "
+                                "references are rewritten by `sewfmu references --regenerate` "
+                                "alone)")
+        for fmu in args.fmu:
+            print(f"wrote {reference_check.record(Path(fmu), Path(args.refs))}")
+        return
+    failing = 0
+    for fmu in args.fmu:
+        for outcome in reference_check.check(Path(fmu), args.refs, args.rtol, args.atol):
+            for deviation in outcome.deviations:
+                print(deviation)
+            failing += len(outcome.deviations)
+            if not outcome.deviations:
+                print(f"{Path(fmu).name}: matches {outcome.reference.source}")
+            elif args.plot:
+                folder = Path(args.plot)
+                folder.mkdir(parents=True, exist_ok=True)
+                picture = folder / f"{outcome.reference.model}_differences.png"
+                fmu_reference.plot(Path(fmu).name, outcome.got, outcome.reference,
+                                   outcome.deviations, picture)
+                print(f"wrote {picture}")
+    if failing:
+        raise ScenarioError(f"{failing} variables deviate from their references")
 
 
 def cmd_host_env(args) -> None:
@@ -258,11 +294,26 @@ def main(argv=None) -> int:
     p.add_argument("--out", help="output folder (default: results/SCENARIO_HOST/)")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.set_defaults(func=cmd_crosscheck)
-    p = sub.add_parser("references", help="check every FMU against its regression reference")
+    p = sub.add_parser("references", help="check FMUs against their regression references "
+                                          "(sewfmu's own, or any FMU with --fmu)")
+    p.add_argument("--fmu", action="append", metavar="PATH",
+                   help="an FMU file (FMI 2.0 or 3.0, made by sewfmu or not); repeatable")
+    p.add_argument("--refs", metavar="DIR",
+                   help="a folder of references in the Cross-Check layout (<Model>/<Model>_ref.csv, "
+                        "_ref.opt, _in.csv); without it: sewfmu's shipped references and the "
+                        "reference the FMU carries (fmi-ls-ref)")
     p.add_argument("--regenerate", action="store_true",
-                   help="rewrite the references from the current FMUs (deliberately)")
+                   help="record the references (with --fmu: into --refs DIR) instead of "
+                        "checking them")
+    p.add_argument("--rtol", type=float,
+                   help="relative tolerance, of each variable's largest magnitude (default: "
+                        "the reference's RelTol, else 1e-6)")
+    p.add_argument("--atol", type=float, help="absolute tolerance (default 1e-12)")
+    p.add_argument("--plot", nargs="?", const="results/references", metavar="DIR",
+                   help="draw each deviating FMU's differences into DIR "
+                        "(default results/references)")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
-                   help="check the FMUs of this FMI version (default 2)")
+                   help="without --fmu: check sewfmu's FMUs of this FMI version (default 2)")
     p.set_defaults(func=cmd_references)
     p = sub.add_parser("host-env", help="the environment a non-Python FMI host needs")
     p.add_argument("--check", action="store_true",

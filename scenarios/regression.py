@@ -22,7 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from . import fmu_reference
 from .analyses import RegressionCase, mechanisms
+from .fmu_reference import Experiment
 
 REFERENCE_DIR = Path(__file__).resolve().parent / "regression_references"
 
@@ -51,77 +53,30 @@ def _input_table(case: RegressionCase):
     return table
 
 
-def simulate_case(name: str, path: Path):
-    """The FMU (FMI 2.0 or 3.0) alone in fmpy's simulate_fmu with the case's inputs: a
-    structured array (time, outputs). The instance is made and freed here, so that fmpy does not
-    unload the library."""
-    from fmpy import simulate_fmu
-
-    from .fmi_calls import LogCollector
-    from .instances import open_instance
-
-    case = cases()[name]
-    instance = open_instance(name, Path(path), LogCollector())
-    outputs = [v.name for v in instance.md.modelVariables if v.causality == "output"]
-    inputs = _input_table(case) if case.inputs else None
-    instance.prepare()
-    instance.instantiate()
-    try:
-        return simulate_fmu(str(path), start_time=0.0, stop_time=case.stop,
-                            output_interval=case.step, input=inputs, output=outputs,
-                            validate=False, fmu_instance=instance.fmu, terminate=False)
-    finally:
-        instance.release()
+def experiment_of(case: RegressionCase) -> Experiment:
+    return Experiment(0.0, case.stop, case.step, _input_table(case) if case.inputs else None,
+                      case.rel_tol)
 
 
-def _write_csv(path: Path, table) -> None:
-    names = table.dtype.names
-    data = np.column_stack([table[n].astype(float) for n in names])
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+def simulate_case(name: str, path: Path) -> dict:
+    """The FMU (FMI 2.0 or 3.0) alone in fmpy's simulate_fmu with the case's inputs:
+    {"time": ..., output: ...}."""
+    return fmu_reference.simulate(Path(path), experiment_of(cases()[name]))
 
 
 def regenerate(fmu_paths: dict[str, Path], folder: Path = REFERENCE_DIR) -> list[Path]:
-    written = []
-    for name, case in cases().items():
-        target = folder / name
-        target.mkdir(parents=True, exist_ok=True)
-        _write_csv(target / f"{name}_ref.csv", simulate_case(name, fmu_paths[name]))
-        if case.inputs:
-            _write_csv(target / f"{name}_in.csv", _input_table(case))
-        (target / f"{name}_ref.opt").write_text(
-            f"StartTime, 0.0\nStopTime, {case.stop!r}\nStepSize, {case.step!r}\n"
-            f"RelTol, {case.rel_tol!r}\n")
-        written.append(target)
-    return written
+    return [fmu_reference.record(Path(fmu_paths[name]), folder, experiment_of(case), model=name)
+            for name, case in cases().items()]
 
 
-def read_options(path: Path) -> dict[str, float]:
-    return {k.strip(): float(v) for k, v in (line.split(",") for line in
-                                             path.read_text().splitlines() if line.strip())}
-
-
-def check(name: str, path: Path, folder: Path = REFERENCE_DIR) -> list[str]:
+def check(name: str, path: Path, folder: Path = REFERENCE_DIR, rtol: float | None = None,
+          atol: float | None = None) -> list[str]:
     """Differences of the FMU from its reference, one line each; empty if it matches."""
-    target = folder / name
-    options = read_options(target / f"{name}_ref.opt")
-    ref = np.genfromtxt(target / f"{name}_ref.csv", delimiter=",", names=True)
+    reference = fmu_reference.read_cross_check(folder, name)
+    if reference is None:
+        return [f"{name}: no reference in {folder}"]
     case = cases()[name]
-    if (options["StopTime"], options["StepSize"]) != (case.stop, case.step):
+    if (reference.experiment.stop, reference.experiment.step) != (case.stop, case.step):
         return [f"{name}: the reference was made for other run options; regenerate it"]
-    got = simulate_case(name, path)
-    problems = []
-    for column in ref.dtype.names:
-        if column not in got.dtype.names:
-            problems.append(f"{name}: output {column} is gone")
-            continue
-        a, b = got[column].astype(float), ref[column]
-        if a.shape != b.shape:
-            problems.append(f"{name}: {column} has {len(a)} points, the reference {len(b)}")
-            continue
-        scale = max(np.abs(b).max(), 1e-300)
-        worst = np.abs(a - b).max()
-        if worst > options["RelTol"] * scale:
-            k = int(np.argmax(np.abs(a - b)))
-            problems.append(f"{name}: {column} differs by {worst:.3g} (at t = {got['time'][k]:g} "
-                            f"s; allowed {options['RelTol']:g} of {scale:.3g})")
-    return problems
+    atol = fmu_reference.DEFAULT_ATOL if atol is None else atol
+    return [str(d) for d in fmu_reference.check(Path(path), reference, rtol, atol)]

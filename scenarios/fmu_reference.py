@@ -1,0 +1,311 @@
+"""Regression references of any co-simulation FMU (FMI 2.0 or 3.0, made by sewfmu or not):
+recorded, read and checked.
+
+Two layouts are read and written:
+- FMI Cross-Check (a folder of the user's, and sewfmu's own shipped references):
+  `<Model>/<Model>_ref.csv` (time and the outputs), `<Model>_ref.opt` (StartTime, StopTime,
+  StepSize, RelTol) and `<Model>_in.csv` (the inputs over time) where the run had inputs;
+- fmi-ls-ref, inside the FMU (as the Modelica Reference-FMUs carry it): a manifest naming the
+  CSV output of the FMU's default experiment (components/carried_reference.py writes it for
+  sewfmu's FMUs).
+
+A check runs the FMU as the reference was made (its time grid, its inputs) and compares every
+variable of the reference: a variable deviates where |value - reference| exceeds
+atol + rtol · (largest |reference| of that variable), and the first such time is reported with
+both values. An FMU is judged by its outputs, whatever its version or build hash says.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.etree import ElementTree as ET
+
+import numpy as np
+
+from .values import ScenarioError
+
+LS_REF = "extra/org.fmi-standard.fmi-ls-ref"
+MANIFEST = f"{LS_REF}/fmi-ls-manifest.xml"
+DEFAULT_RTOL = 1e-6
+DEFAULT_ATOL = 1e-12
+
+
+@dataclass
+class Experiment:
+    """How the FMU runs for a reference: from start to stop, its outputs every `step`, its
+    inputs (a structured array with a time column) or none (start values)."""
+    start: float
+    stop: float
+    step: float
+    inputs: np.ndarray | None = None
+    rel_tol: float = DEFAULT_RTOL
+
+
+@dataclass
+class Reference:
+    model: str
+    source: str                               # where it was read, for messages
+    columns: dict[str, np.ndarray]            # "time" and each variable, as numbers
+    experiment: Experiment
+    not_compared: list[str] = field(default_factory=list)   # text columns (String, Binary)
+
+
+@dataclass
+class Deviation:
+    model: str
+    variable: str
+    time: float | None = None
+    value: float | None = None
+    expected: float | None = None
+    allowed: float | None = None
+    why: str = ""
+
+    def __str__(self) -> str:
+        if self.why:
+            return f"{self.model}: {self.variable}: {self.why}"
+        return (f"{self.model}: {self.variable} leaves the tolerance at t = {self.time:g} s: "
+                f"{self.value:.10g}, the reference {self.expected:.10g} "
+                f"(allowed ±{self.allowed:.3g})")
+
+
+# --- reading ----------------------------------------------------------------------------------
+def _number(text: str) -> float:
+    lowered = text.strip().lower()
+    if lowered in ("true", "false"):
+        return 1.0 if lowered == "true" else 0.0
+    return float(text)
+
+
+def parse_csv(text: str) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Columns of a result CSV as numbers (Booleans as 0/1), and the columns that are not
+    numbers (left out)."""
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows or rows[0][0].strip().strip('"') != "time":
+        raise ScenarioError("a reference CSV starts with a header whose first column is time")
+    header = [h.strip().strip('"') for h in rows[0]]
+    columns, skipped = {}, []
+    for j, name in enumerate(header):
+        try:
+            columns[name] = np.array([_number(r[j]) for r in rows[1:] if len(r) > j])
+        except ValueError:
+            skipped.append(name)
+    if "time" not in columns or len(columns["time"]) == 0:
+        raise ScenarioError("a reference CSV needs rows with a number in its time column")
+    return columns, skipped
+
+
+def _parsed(text: str, where) -> tuple[dict[str, np.ndarray], list[str]]:
+    try:
+        return parse_csv(text)
+    except (ScenarioError, IndexError) as err:
+        raise ScenarioError(f"{where}: {err or 'a row has fewer columns than the header'}") \
+            from None
+
+
+def _table(columns: dict[str, np.ndarray]) -> np.ndarray:
+    table = np.zeros(len(columns["time"]), dtype=[(n, float) for n in columns])
+    for name, values in columns.items():
+        table[name] = values
+    return table
+
+
+def read_options(path: Path) -> dict[str, float]:
+    return {k.strip(): float(v) for k, v in (line.split(",", 1) for line in
+                                             path.read_text().splitlines() if line.strip())}
+
+
+def cross_check_folder(refs: Path, model: str) -> Path:
+    """Where a model's reference lives in a Cross-Check folder: refs/<Model>/, or refs itself
+    when it holds <Model>_ref.csv directly."""
+    refs = Path(refs)
+    return refs if (refs / f"{model}_ref.csv").is_file() else refs / model
+
+
+def read_cross_check(refs: Path, model: str) -> Reference | None:
+    folder = cross_check_folder(refs, model)
+    result = folder / f"{model}_ref.csv"
+    if not result.is_file():
+        return None
+    columns, skipped = _parsed(result.read_text(), result)
+    opt = folder / f"{model}_ref.opt"
+    options = read_options(opt) if opt.is_file() else {}
+    times = columns["time"]
+    inputs_file = folder / f"{model}_in.csv"
+    inputs = _table(_parsed(inputs_file.read_text(), inputs_file)[0]) \
+        if inputs_file.is_file() else None
+    experiment = Experiment(options.get("StartTime", float(times[0])),
+                            options.get("StopTime", float(times[-1])),
+                            options.get("StepSize", _grid_step(times)), inputs,
+                            options.get("RelTol", DEFAULT_RTOL))
+    return Reference(model, str(result), columns, experiment, skipped)
+
+
+def read_carried(fmu: Path) -> Reference | None:
+    """The reference an FMU carries (fmi-ls-ref), run as its default experiment; None if it
+    carries none."""
+    from fmpy import read_model_description
+
+    with zipfile.ZipFile(fmu) as archive:
+        if MANIFEST not in archive.namelist():
+            return None
+        root = ET.fromstring(archive.read(MANIFEST))
+        sources = [r.get("source") for r in root.iter() if r.tag.endswith("Related")
+                   and r.get("role") == "result" and (r.get("type") or "text/csv") == "text/csv"]
+        if not sources or f"{LS_REF}/{sources[0]}" not in archive.namelist():
+            return None
+        text = archive.read(f"{LS_REF}/{sources[0]}").decode("utf-8")
+    md = read_model_description(str(fmu), validate=False)
+    columns, skipped = _parsed(text, f"{fmu}: {sources[0]}")
+    times = columns["time"]
+    default = md.defaultExperiment
+    step = float(default.stepSize) if default is not None and default.stepSize else \
+        _grid_step(times)
+    return Reference(md.modelName, f"{fmu.name} ({sources[0]}, fmi-ls-ref)", columns,
+                     Experiment(float(times[0]), float(times[-1]), step), skipped)
+
+
+def _grid_step(times: np.ndarray) -> float:
+    steps = np.diff(times)
+    return float(np.median(steps[steps > 0])) if np.any(steps > 0) else 1.0
+
+
+# --- running and comparing --------------------------------------------------------------------
+def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = None) -> dict:
+    """The FMU run as the experiment says: {"time": ..., variable: ...}. The instance is made
+    and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
+    from fmpy import simulate_fmu
+
+    from .fmi_calls import LogCollector
+    from .instances import open_instance
+
+    log = LogCollector()
+    instance = open_instance("reference", Path(fmu), log)
+    known = {v.name for v in instance.md.modelVariables}
+    wanted = [v for v in (variables or [v.name for v in instance.md.modelVariables
+                                        if v.causality == "output"]) if v in known]
+    instance.prepare()
+    instance.instantiate()
+    try:
+        result = simulate_fmu(str(fmu), start_time=experiment.start, stop_time=experiment.stop,
+                              output_interval=experiment.step, step_size=experiment.step,
+                              input=experiment.inputs, output=wanted, validate=False,
+                              fmu_instance=instance.fmu, terminate=False)
+    except Exception as err:      # noqa: BLE001 - a failed run is a finding, said in one line
+        errors = [line for line in log.lines if line.startswith(("[ERROR]", "[FATAL]"))]
+        raise ScenarioError(f"{instance.md.modelName}: the run for its reference failed: "
+                            f"{errors[-1] if errors else err}") from None
+    finally:
+        if not instance.failed:
+            instance.release()
+    return {name: np.asarray(result[name], dtype=float) for name in result.dtype.names}
+
+
+def compare(model: str, got: dict, reference: Reference, rtol: float | None = None,
+            atol: float = DEFAULT_ATOL) -> list[Deviation]:
+    """Every variable of the reference that the run does not reproduce within the tolerance."""
+    rtol = reference.experiment.rel_tol if rtol is None else rtol
+    deviations = []
+    t_ref, t_got = reference.columns["time"], got["time"]
+    same_grid = len(t_got) == len(t_ref) and np.allclose(t_got, t_ref, rtol=0,
+                                                         atol=1e-9 * max(1.0, abs(t_ref[-1])))
+    for name, expected in reference.columns.items():
+        if name == "time":
+            continue
+        if name not in got:
+            deviations.append(Deviation(model, name, why="the FMU has no such variable now"))
+            continue
+        value = got[name] if same_grid else np.interp(t_ref, t_got, got[name])
+        allowed = atol + rtol * float(np.max(np.abs(expected))) if len(expected) else atol
+        off = np.abs(value - expected) > allowed
+        off |= np.isnan(value) != np.isnan(expected)
+        if np.any(off):
+            k = int(np.argmax(off))
+            deviations.append(Deviation(model, name, float(t_ref[k]), float(value[k]),
+                                        float(expected[k]), allowed))
+    return deviations
+
+
+def run_and_compare(fmu: Path, reference: Reference, rtol: float | None = None,
+                    atol: float = DEFAULT_ATOL) -> tuple[dict, list[Deviation]]:
+    """The FMU run as the reference was made, and its deviations from it."""
+    variables = [n for n in reference.columns if n != "time"]
+    got = simulate(fmu, reference.experiment, variables)
+    return got, compare(reference.model, got, reference, rtol, atol)
+
+
+def check(fmu: Path, reference: Reference, rtol: float | None = None,
+          atol: float = DEFAULT_ATOL) -> list[Deviation]:
+    return run_and_compare(fmu, reference, rtol, atol)[1]
+
+
+# --- recording --------------------------------------------------------------------------------
+def default_experiment(fmu: Path) -> Experiment:
+    """The FMU's DefaultExperiment (a step of a 500th of the run where it gives none)."""
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmu), validate=False)
+    default = md.defaultExperiment
+    start = float(default.startTime) if default is not None and default.startTime else 0.0
+    stop = float(default.stopTime) if default is not None and default.stopTime else 1.0
+    step = float(default.stepSize) if default is not None and default.stepSize else \
+        (stop - start) / 500
+    return Experiment(start, stop, step)
+
+
+def write_csv(path: Path, columns: dict[str, np.ndarray]) -> None:
+    names = list(columns)
+    with open(path, "w", newline="") as out:
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(names)
+        for row in zip(*(columns[n] for n in names)):
+            writer.writerow([repr(float(x)) for x in row])
+
+
+def record(fmu: Path, refs: Path, experiment: Experiment | None = None,
+           model: str | None = None) -> Path:
+    """Run the FMU (its DefaultExperiment, or `experiment`) and write its reference into
+    refs/<Model>/ in the Cross-Check layout."""
+    from fmpy import read_model_description
+
+    model = model or read_model_description(str(fmu), validate=False).modelName
+    experiment = experiment or default_experiment(fmu)
+    got = simulate(fmu, experiment)
+    folder = Path(refs) / model
+    folder.mkdir(parents=True, exist_ok=True)
+    write_csv(folder / f"{model}_ref.csv", got)
+    if experiment.inputs is not None:
+        write_csv(folder / f"{model}_in.csv",
+                  {n: experiment.inputs[n] for n in experiment.inputs.dtype.names})
+    (folder / f"{model}_ref.opt").write_text(
+        f"StartTime, {experiment.start!r}\nStopTime, {experiment.stop!r}\n"
+        f"StepSize, {experiment.step!r}\nRelTol, {experiment.rel_tol!r}\n")
+    return folder
+
+
+def plot(fmu_name: str, got: dict, reference: Reference, deviations: list[Deviation],
+         path: Path) -> Path:
+    """The deviating variables against their reference, and the differences."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [d.variable for d in deviations if not d.why][:6]
+    fig, axes = plt.subplots(len(names), 2, figsize=(10, 2.6 * len(names)), squeeze=False)
+    t = reference.columns["time"]
+    for (left, right), name in zip(axes, names):
+        value = np.interp(t, got["time"], got[name])
+        left.plot(t, reference.columns[name], label="reference")
+        left.plot(t, value, "--", label=fmu_name)
+        left.set_ylabel(name)
+        left.legend(fontsize=7)
+        right.plot(t, value - reference.columns[name])
+        right.set_ylabel(f"{name}: difference")
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
