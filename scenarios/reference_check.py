@@ -96,6 +96,11 @@ def record(fmu: Path, refs: Path) -> Path:
     """Record the FMU's reference into refs: its DefaultExperiment, or for one of sewfmu's FMUs
     its regression case (inputs that make it work hard)."""
     md = describe(fmu)
+    shipped = regression.REFERENCE_DIR.resolve()
+    if Path(refs).resolve() == shipped or shipped in Path(refs).resolve().parents:
+        raise ScenarioError(f"--refs {refs}: that is sewfmu's own references folder; record "
+                            f"into a folder of yours (sewfmu's are rewritten by `sewfmu "
+                            f"references --regenerate` alone)")
     experiment = regression.experiment_of(regression.cases()[md.modelName]) \
         if is_sewfmus(md) else None
     return fmu_reference.record(Path(fmu), Path(refs), experiment, model=md.modelName)
