@@ -26,8 +26,12 @@ FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "
            "min_transmission_angle_F_deg": "deg"}
 
 L5_L4_RATIOS = (3.5, 4.5, 5.5, 6.0, 6.5, 7.0)
-ROD_RATIOS = tuple(np.round(np.arange(0.7, 1.7001, 0.05), 2))
-_PHI1 = np.radians(np.arange(0.0, 360.0, 0.5))
+ROD_RATIOS = tuple(round(0.7 + 0.05 * k, 2) for k in range(21))     # 0.7 to 1.7
+
+
+def _phi1():
+    """The crank angles of the studies: every 0.5° of a turn."""
+    return np.radians(np.arange(0.0, 360.0, 0.5))
 
 
 def _swing_deg(angles: np.ndarray) -> float:
@@ -99,7 +103,7 @@ def plot(curves, path, title: str) -> None:
 # --- the lever-ratio study -----------------------------------------------------------------------
 def _case(params: FeedParams, **changes) -> dict:
     try:
-        motion = sampled(FeedLinkage(with_values(params, **changes)).motion, _PHI1)
+        motion = sampled(FeedLinkage(with_values(params, **changes)).motion, _phi1())
     except AssemblyError as err:
         return {"assembles": False, "error": str(err)}
     phi5 = np.degrees(np.unwrap(motion.phi5.value))
@@ -117,7 +121,7 @@ def ratio_study() -> dict:
     for ratio in ROD_RATIOS:
         case = _case(base, l2=base.l8 * float(ratio))
         rods.append({"l2_over_l8": float(ratio), "l2_mm": base.l8 * float(ratio) * 1e3, **case})
-    return {"phi1_deg": np.degrees(_PHI1).tolist(), "lever_ratio": lever, "rod_ratio": rods}
+    return {"phi1_deg": np.degrees(_phi1()).tolist(), "lever_ratio": lever, "rod_ratio": rods}
 
 
 def plot_study(study: dict, path) -> None:
