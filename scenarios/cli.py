@@ -141,6 +141,15 @@ def cmd_export_ssp(args) -> None:
     print(export(scenario, Path(args.output)))
 
 
+def cmd_export_fmu(args) -> None:
+    from .export_fmu import export_fmu
+    from .runner import fmus_for
+
+    scenario = _load_with_sets(args.scenario, args.set)
+    scenario.fmi = args.fmi            # the components of the FMI version of the container
+    print(export_fmu(scenario, Path(args.output), fmus_for(scenario), fmi=args.fmi))
+
+
 def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
@@ -286,6 +295,14 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--output", required=True, help="the .ssp file to write")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.set_defaults(func=cmd_export_ssp)
+    p = sub.add_parser("export-fmu", help="the scenario as one co-simulation FMU for any FMI "
+                                          "tool")
+    p.add_argument("scenario")
+    p.add_argument("-o", "--output", required=True, help="the FMU file to write (X.fmu)")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                   help="the FMI version of the exported FMU and of the FMUs inside (default 2)")
+    p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
+    p.set_defaults(func=cmd_export_fmu)
     p = sub.add_parser("crosscheck", help="run the scenario in another FMI host and compare")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
     p.add_argument("--host", required=True, choices=["libcosim", "ecos", "ecos-cli"],

@@ -1,0 +1,194 @@
+"""A scenario as one co-simulation FMU, for FMI tools that know neither Python FMUs nor SSP: the
+punch drive dropped in as one block.
+
+Built on fmpy's container FMU: its C library (binaries/) instantiates the scenario's FMUs, found
+under resources/, steps them at one fixed internal step and passes every connected output to its
+input after each step, in the order of the connections (a direct-feedthrough output reaches the
+next FMU within the same step, as sewfmu's Jacobi master does). The container exposes, under
+`instance.variable` names, every parameter of every instance (start: the scenario's value, else
+the FMU's default) and the scenario's recorded outputs; its DefaultExperiment is the scenario's,
+a whole number of even steps.
+
+The FMUs inside are sewfmu's Python FMUs: a host needs what they need (libpython loaded, a
+Python home; docs/fmi.md). The container steps at a fixed step, as the Jacobi master does:
+scenarios run by the iterative or adaptive master are refused unless exported for Jacobi.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import uuid
+import zipfile
+from pathlib import Path
+
+from .format import Scenario
+from .values import ScenarioError
+
+FIXED_STEP_MASTERS = ("jacobi", "gauss-seidel")
+# the container's library names variable types in FMI 3.0's words
+_CONTAINER_TYPES = {"Real": "Float64", "Integer": "Int32"}
+
+
+def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
+               fmi: int = 2) -> Path:
+    """Write the scenario as one co-simulation FMU (FMI 2.0, or 3.0) to `output`."""
+    from fmpy import read_model_description
+    from fmpy.container_fmu.cli import create_container_fmu
+    from fmpy.container_fmu.config import Component, Configuration, Connection
+
+    output = _checked_output(Path(output))
+    if scenario.master not in FIXED_STEP_MASTERS:
+        raise ScenarioError(f"{scenario.source}: the exported FMU steps its components at a "
+                            f"fixed step (Jacobi); this scenario runs with the {scenario.master} "
+                            f"master: export it with --set experiment.master=\"jacobi\" (and a "
+                            f"step it is stable at)")
+    if fmi not in (2, 3):
+        raise ScenarioError(f"--fmi: the FMI version of the exported FMU, 2 or 3, got {fmi!r}")
+    n, h = scenario.even_steps()
+    stop = scenario.end_time()
+    components, variables, units = {}, {}, {}
+    for inst in scenario.instances.values():
+        md = read_model_description(str(fmu_paths[inst.fmu]), validate=False)
+        components[inst.name] = Component(name=inst.name, filename=Path(fmu_paths[inst.fmu]),
+                                          modelDescription=md)
+        variables[inst.name] = {v.name: v for v in md.modelVariables}
+        units.update({u.name: u for u in md.unitDefinitions})
+    exposed, mappings = _exposed(scenario, components, variables)
+    connections = [Connection(components[c.src], [variables[c.src][c.src_var]],
+                              components[c.dst], [variables[c.dst][c.dst_var]])
+                   for c in scenario.connections]
+    description = _description(scenario, fmi, stop, h, exposed, list(units.values()))
+    config = Configuration(parallelDoStep=False, modelDescription=description,
+                           components=list(components.values()), connections=connections,
+                           variableMappings=mappings)
+    with tempfile.TemporaryDirectory(prefix="sewfmu_export_") as work:
+        built, tree = Path(work) / "container.fmu", Path(work) / "tree"
+        tree.mkdir()                     # fmpy removes and makes it again
+        create_container_fmu(config, tree, built)
+        _finish(built, output, scenario)
+    return output
+
+
+def _checked_output(output: Path) -> Path:
+    if output.suffix != ".fmu":
+        raise ScenarioError(f"-o {output}: the exported file is an FMU: give a name ending in .fmu")
+    if output.is_dir():
+        raise ScenarioError(f"-o {output}: is a folder")
+    if not output.parent.exists():
+        raise ScenarioError(f"-o {output}: the folder {output.parent} does not exist")
+    return output
+
+
+def _exposed(scenario: Scenario, components: dict, variables: dict):
+    """The container's variables (besides time) and what each maps to: every parameter of every
+    instance, and the recorded outputs."""
+    from fmpy.model_description import ModelVariable
+
+    exposed, mappings = [], {}
+    for name in scenario.instances:
+        given = scenario.instances[name].parameters
+        for v in variables[name].values():
+            kind = _kind(v)
+            if v.causality == "parameter" and kind in ("Real", "Integer"):
+                start = given.get(v.name, v.start)
+                var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="parameter",
+                                    variability="fixed", initial="exact", start=_start(start, kind),
+                                    unit=v.unit, description=v.description)
+                exposed.append(var)
+                mappings[var] = [(components[name], v)]
+    for column in _recorded(scenario, variables):
+        name, _, var_name = column.partition(".")
+        v = variables[name][var_name]
+        kind = _kind(v)
+        var = ModelVariable(name=column, type=kind, causality="output",
+                            variability="discrete" if kind == "Boolean" else "continuous",
+                            initial="calculated", unit=v.unit, description=v.description)
+        exposed.append(var)
+        mappings[var] = [(components[name], v)]
+    return exposed, mappings
+
+
+def _recorded(scenario: Scenario, variables: dict) -> list[str]:
+    if scenario.record is not None:
+        return list(scenario.record)
+    return [f"{name}.{v.name}" for name, vs in variables.items() for v in vs.values()
+            if v.causality == "output" and _kind(v) in ("Real", "Integer", "Boolean")]
+
+
+def _kind(variable) -> str:
+    from .fmi_calls import kind_of
+
+    return kind_of(variable)
+
+
+def _start(value, kind: str) -> str:
+    return repr(int(float(value))) if kind == "Integer" else repr(float(value))
+
+
+def _description(scenario: Scenario, fmi: int, stop: float, step: float, exposed: list,
+                 units: list):
+    from fmpy.model_description import (
+        CoSimulation,
+        DefaultExperiment,
+        ModelDescription,
+        ModelVariable,
+        Unknown,
+    )
+
+    # the container's value reference 0 is the time; FMI 2.0 has no independent variable in
+    # co-simulation (and FMI Library refuses one without a start), so there it is a local
+    time = ModelVariable(name="time", type="Real", causality="local", initial="calculated",
+                         variability="continuous", description="simulation time")
+    if fmi == 3:
+        time.causality, time.initial = "independent", None
+        for var in exposed:
+            var.type = {"Real": "Float64", "Integer": "Int32"}.get(var.type, var.type)
+        time.type = "Float64"
+    token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, f"sewfmu:{scenario.name}:"
+                                                     f"{scenario.digest}:{stop!r}:{step!r}")) + "}"
+    outputs = [v for v in exposed if v.causality == "output"]
+    return ModelDescription(
+        fmiVersion="3.0" if fmi == 3 else "2.0", modelName=scenario.name,
+        outputs=[Unknown(variable=v) for v in outputs],
+        initialUnknowns=[Unknown(variable=v) for v in outputs],
+        instantiationToken=token, description=scenario.description or scenario.name,
+        generationTool="sewfmu export-fmu (fmpy container FMU)",
+        defaultExperiment=DefaultExperiment(startTime="0.0", stopTime=repr(stop),
+                                            stepSize=repr(step)),
+        coSimulation=CoSimulation(fixedInternalStepSize=step), unitDefinitions=units,
+        modelVariables=[time, *exposed])
+
+
+def _finish(built: Path, output: Path, scenario: Scenario) -> None:
+    """The container's configuration in the container library's types (fmpy writes FMI 2.0
+    components' connections as Real), without the stray archive fmpy leaves in it; written
+    next to `output` first and then moved, so that a reader never sees half a file."""
+    staged = output.with_name(f".{output.name}.partial")
+    with zipfile.ZipFile(built) as source, \
+            zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as target:
+        for item in source.infolist():
+            if item.filename == "Container.zip":
+                continue
+            data = source.read(item)
+            if item.filename == "resources/container.json":
+                config = json.loads(data)
+                for key in ("connections", "variables"):
+                    for entry in config[key]:
+                        entry["variableType"] = _CONTAINER_TYPES.get(entry["variableType"],
+                                                                      entry["variableType"])
+                data = json.dumps(config, indent=1).encode()
+            target.writestr(item, data)
+        target.writestr("documentation/index.html", _documentation(scenario))
+    shutil.move(staged, output)
+
+
+def _documentation(scenario: Scenario) -> str:
+    fmus = ", ".join(sorted({i.fmu for i in scenario.instances.values()}))
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{scenario.name}</title>"
+            f"</head><body><h1>{scenario.name}</h1><p>{scenario.description}</p>"
+            f"<p>sewfmu's scenario {scenario.name} as one co-simulation FMU (fmpy's container "
+            f"FMU): {fmus} stepped at a fixed step. The FMUs inside are Python FMUs "
+            f"(pythonfmu): the host process needs libpython loaded and a Python home (3.10 to "
+            f"3.13, the standard library only), on Linux x86-64 (win64 binaries untried).</p>"
+            f"</body></html>\n")
