@@ -31,6 +31,7 @@ import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
 from .._version import __version__
+from . import fmu_documentation
 from .carried_reference import carry, default_experiment_output
 from .registry import FMI_VERSIONS, FMUS
 
@@ -177,7 +178,8 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
         pkg_dir = tmp / package
         pkg_dir.mkdir()
         modules = sorted(p.stem for p in source.glob("*.py")
-                         if p.stem not in ("__init__", "build", "carried_reference", other_layer))
+                         if p.stem not in ("__init__", "build", "carried_reference",
+                                           "fmu_documentation", other_layer))
         for mod in modules:
             shutil.copy2(source / f"{mod}.py", pkg_dir / f"{mod}.py")
         # Import every module with the package: a host that loads this FMU again from another
@@ -205,6 +207,9 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
             copied = getattr(importlib.import_module(f"{package}.{module}"), slave)
             layer = _module_of(package, "fmi2_layer", source).Fmi2Layer
             carry(built, name, default_experiment_output(copied, layer))
+            fmu_documentation.write(built, copied, fmi)
+            if fmi == 3:
+                _describe_sources(built, name)
             # replace atomically: another process may be reading the old FMU right now
             out = dest / f"{name}.fmu"
             staged = dest / f".{name}.fmu.{os.getpid()}"
@@ -217,6 +222,28 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
                         or m.startswith(package + ".")]:
                 del sys.modules[mod]
     return Path(out)
+
+
+def _describe_sources(fmu: Path, model_identifier: str) -> None:
+    """FMI 3.0 asks an FMU that ships sources (pythonfmu3 puts its C++ export library's into
+    sources/) for sources/buildDescription.xml: which files to compile, and how."""
+    with zipfile.ZipFile(fmu, "a", compression=zipfile.ZIP_DEFLATED) as archive:
+        sources = sorted(n[len("sources/"):] for n in archive.namelist()
+                         if n.startswith("sources/") and n.endswith(".cpp"))
+        if not sources:
+            return
+        files = "".join(f'      <SourceFile name="{name}"/>\n' for name in sources)
+        archive.writestr("sources/buildDescription.xml", f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiBuildDescription fmiVersion="3.0">
+  <BuildConfiguration modelIdentifier="{model_identifier}" description="pythonfmu3's export \
+library: needs the Python 3 headers and the FMI 3.0 headers on the include path; on Linux the \
+host process provides libpython">
+    <SourceFileSet language="C++17">
+{files}      <IncludeDirectory name="src"/>
+    </SourceFileSet>
+  </BuildConfiguration>
+</fmiBuildDescription>
+""")
 
 
 def _module_of(package: str, module: str, source: Path):

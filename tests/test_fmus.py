@@ -376,3 +376,28 @@ def test_input_start_values_are_the_default_setup(fmus):
     _, _, a, jerk = CarriageDrive().motion(0.0, omega, 0.0)
     assert _starts(fmus["CarriageModal"]) == pytest.approx(
         {"a_base": a, "a_base_dot": jerk}, rel=1e-12)
+
+
+def test_each_fmu_says_what_a_host_needs_and_how_its_sources_build(fmus):
+    """documentation/index.html (FMI's place for it): libpython, a Python home, every parameter;
+    an FMI 3.0 FMU that ships sources describes their build (sources/buildDescription.xml,
+    valid against the standard's schema)."""
+    import fmpy
+    from lxml import etree
+
+    schema = etree.XMLSchema(etree.parse(str(Path(fmpy.__file__).parent / "schema" / "fmi3" /
+                                             "fmi3BuildDescription.xsd")))
+    for name, path in fmus.items():
+        with zipfile.ZipFile(path) as archive:
+            page = archive.read("documentation/index.html").decode("utf-8")
+            assert "libpython" in page and "PYTHONHOME" in page and "3.10 to 3.13" in page, name
+            md = read_model_description(str(path))
+            for v in md.modelVariables:
+                if v.causality == "parameter":
+                    assert f"<code>{v.name}</code>" in page, (name, v.name)
+            sources = [n for n in archive.namelist() if n.startswith("sources/")]
+            if md.fmiVersion.startswith("3") and sources:
+                description = etree.fromstring(archive.read("sources/buildDescription.xml"))
+                assert schema.validate(description), schema.error_log
+                listed = {f.get("name") for f in description.iter("SourceFile")}
+                assert listed == {n[len("sources/"):] for n in sources if n.endswith(".cpp")}
