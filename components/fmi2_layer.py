@@ -33,7 +33,7 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
         for v in self.variables:
             if v.causality == "output":
                 extra = {"initial": Fmi2Initial.calculated,
-                         "variability": (Fmi2Variability.discrete if v.kind == "Boolean"
+                         "variability": (Fmi2Variability.discrete if v.discrete
                                          else Fmi2Variability.continuous)}
             elif v.causality == "calculatedParameter":
                 extra = {"initial": Fmi2Initial.calculated, "variability": Fmi2Variability.fixed}

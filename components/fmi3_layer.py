@@ -152,7 +152,7 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
         if v.causality == "independent":
             attrib["variability"] = "continuous"
         elif v.causality == "output":
-            attrib["variability"] = "discrete" if v.kind == "Boolean" else "continuous"
+            attrib["variability"] = "discrete" if v.discrete else "continuous"
             attrib["initial"] = "calculated"
         elif v.causality == "calculatedParameter":
             attrib["variability"] = "fixed"

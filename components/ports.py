@@ -16,6 +16,7 @@ class Port:
     start: float = 0.0             # inputs only
     feedthrough: bool = False      # outputs only: depends on the inputs at the same instant
     kind: str = "Real"             # "Real" or "Boolean"
+    discrete: bool = False         # outputs: a value of the last step, not to interpolate
     source: str = ""               # linkage outputs: where in the model's motion the value is
                                    # ("E.x", "joints.M.vy"); default: the port's name
     bound: float | None = -1.0     # inputs: the largest magnitude the mechanism can see; -1:

@@ -65,6 +65,7 @@ class Variable:
     setter: Callable[[Any], None] | None = None
     start: Any = None              # parameters and inputs
     feedthrough: bool = False      # outputs: depends on the inputs at the same instant
+    discrete: bool = False         # outputs: changes only at communication points
     min: float | None = None       # parameters and inputs: the declared range
     max: float | None = None
 
@@ -151,7 +152,8 @@ class SewSlave(ExceptionFreeAccess):
                      for port in cls.inputs]
         declared += [Variable(port.name, port.kind, "output",
                               f"{port.description} [{port.unit}]", port.unit,
-                              self._output_getter(port.name), feedthrough=port.feedthrough)
+                              self._output_getter(port.name), feedthrough=port.feedthrough,
+                              discrete=port.discrete or port.kind == "Boolean")
                      for port in cls.outputs]
         declared += [Variable(port.name, "Real", "calculatedParameter",
                               f"{port.description} [{port.unit}]", port.unit,
