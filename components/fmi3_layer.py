@@ -50,7 +50,9 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             self.remember(vr, v)
 
     def _error(self, message: str) -> None:
-        self.log(message, Fmi3Status.error)
+        # FMI 3.0 allows no logMessage call with logging off; pythonfmu3's binary passes on a
+        # message marked debug only while logging is on (without the mark it passes on all)
+        self.log(message, Fmi3Status.error, debug=True)
 
     def do_step(self, current_time, step_size):
         if not self._start_known and self._initialized and math.isfinite(current_time):

@@ -171,3 +171,31 @@ def test_another_fmi_version_is_one_clear_line(capsys, tmp_path, value):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "experiment.fmi" in err and "2 or 3" in err, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("logging_on", [True, False])
+def test_an_fmi3_fmu_logs_only_with_logging_on(fmu3_paths, logging_on):
+    """FMI 3.0: with loggingOn = false the FMU calls no logMessage at all; on, a bad parameter
+    is logged at Error with its reason; either way every doStep is refused (Discard)."""
+    from fmpy import extract
+    from fmpy.fmi3 import FMU3Slave
+
+    path = fmu3_paths["PunchContact"]
+    md = read_model_description(str(path))
+    messages = []
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="punch")
+    fmu.instantiate(loggingOn=logging_on,
+                    logMessage=lambda env, status, category, text: messages.append((status, text)))
+    mass = next(v.valueReference for v in md.modelVariables if v.name == "m")
+    fmu.enterInitializationMode()
+    fmu.setFloat64([mass], [-1.0])
+    fmu.exitInitializationMode()
+    with pytest.raises(FMICallException, match="discard"):
+        fmu.doStep(0.0, 1e-3)
+    fmu.terminate()
+    fmu.fmi3FreeInstance(fmu.component)              # the library stays loaded (pythonfmu3)
+    if logging_on:
+        assert messages and messages[0][0] == 3 and b"parameter m: must be > 0 kg" in messages[0][1]
+    else:
+        assert messages == []
