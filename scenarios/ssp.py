@@ -29,7 +29,10 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 PARAMETER_SET = "sewfmu"
 SEWFMU = "https://github.com/sewfmu/ssp-annotation"
 ANNOTATION = "org.sewfmu.experiment"
+# OMSimulator's annotations (its command-line tool refuses a system without its step)
+OMS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 ET.register_namespace("sewfmu", SEWFMU)
+ET.register_namespace("oms", OMS)
 ET.register_namespace("ssd", SSD)
 ET.register_namespace("ssc", SSC)
 ET.register_namespace("ssv", SSV)
@@ -79,6 +82,16 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
         ET.SubElement(connections, _q(SSD, "Connection"), {
             "startElement": con.src, "startConnector": con.src_var,
             "endElement": con.dst, "endConnector": con.dst_var})
+    # the step that meets the stop time in whole, even steps: a fixed-step tool ends there
+    # (the adaptive master's step is its first step, not a grid)
+    step = scenario.step if scenario.master == "adaptive" else scenario.even_steps()[1]
+    # the step where OMSimulator reads it (fmpy's SSP parser reads it too, though its
+    # simulate_ssp takes the step as an argument: docs/fmi.md)
+    oms = ET.SubElement(ET.SubElement(ET.SubElement(system, _q(SSD, "Annotations")),
+                                      _q(SSC, "Annotation"), {"type": "org.openmodelica"}),
+                        _q(OMS, "Annotations"))
+    ET.SubElement(ET.SubElement(oms, _q(OMS, "SimulationInformation")),
+                  _q(OMS, "FixedStepMaster"), {"description": "oms-ma", "stepSize": repr(step)})
     units = ET.SubElement(root, _q(SSD, "Units"))
     for name in sorted(used_units):
         unit = ET.SubElement(units, _q(SSC, "Unit"), {"name": name})
@@ -89,9 +102,6 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     # scenarios/ssp_import.py reads it back
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
-    # the step that meets the stop time in whole, even steps: a fixed-step tool ends there
-    # (the adaptive master's step is its first step, not a grid)
-    step = scenario.step if scenario.master == "adaptive" else scenario.even_steps()[1]
     settings = ssp_settings(scenario, step)
     ET.SubElement(note, _q(SEWFMU, "Experiment"),
                   {k: repr(v) if isinstance(v, float) else v for k, v in settings.items()})
