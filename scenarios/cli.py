@@ -218,7 +218,10 @@ def cmd_host_env(args) -> None:
     for key, value in env.items():
         print(f"export {key}={value}")
     if args.check:
-        problems = check_host_environment(dict(os.environ))
+        checked = dict(os.environ)
+        checked.update({k: v for k, v in (("PYTHONHOME", args.home), ("LD_PRELOAD", args.preload))
+                        if v})
+        problems = check_host_environment(checked)
         if problems:
             raise ScenarioError("this environment cannot host the FMUs outside Python: "
                                 + "; ".join(problems))
@@ -334,7 +337,12 @@ def main(argv=None) -> int:
     p.set_defaults(func=cmd_references)
     p = sub.add_parser("host-env", help="the environment a non-Python FMI host needs")
     p.add_argument("--check", action="store_true",
-                   help="check the current environment; one clear line if something is missing")
+                   help="check the current environment (or --home and --preload); one clear "
+                        "line if something is missing")
+    p.add_argument("--home", help="with --check: the Python home a host will be given (a home "
+                                  "of another Python version cannot be exported to sewfmu's "
+                                  "own process: Python would not start)")
+    p.add_argument("--preload", help="with --check: the libpython a host will preload")
     p.set_defaults(func=cmd_host_env)
     p = sub.add_parser("sweep", help="a grid of co-simulations, in parallel")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")

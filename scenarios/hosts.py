@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -135,22 +136,40 @@ def host_environment() -> dict[str, str]:
             "LD_LIBRARY_PATH": str(Path(sys.prefix) / "lib")}
 
 
+# the Python versions whose home and libpython the FMUs run with (pythonfmu's binary uses the
+# stable parts of the C API; tried with each)
+HOST_PYTHONS = ("3.10", "3.11", "3.12", "3.13")
+
+
 def check_host_environment(env: dict[str, str]) -> list[str]:
-    """What is missing from `env` for a non-Python host; empty if it is complete."""
+    """What is missing from `env` for a non-Python host; empty if it is complete. Any Python of
+    HOST_PYTHONS will do, if the preloaded libpython and the home are the same version."""
     problems = []
     preload = env.get("LD_PRELOAD", "")
     libs = [p for p in preload.replace(":", " ").split() if "libpython" in Path(p).name]
+    lib_version = None
     if not libs:
         problems.append("LD_PRELOAD does not name libpython3.x.so (the FMUs' binary needs the "
                         "Python symbols; without it the host dies with a segmentation fault)")
     elif not all(Path(p).exists() for p in libs):
         problems.append(f"LD_PRELOAD names {libs[0]}, which does not exist (a Python built "
                         f"without --enable-shared has no libpython to preload)")
-    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    else:
+        found = re.search(r"libpython(3\.\d+)", Path(libs[0]).name)
+        lib_version = found.group(1) if found else None
+        if lib_version not in HOST_PYTHONS:
+            problems.append(f"LD_PRELOAD names {Path(libs[0]).name}: the FMUs run with Python "
+                            f"{', '.join(HOST_PYTHONS)}")
     home = env.get("PYTHONHOME")
-    if not home or not (Path(home) / "lib" / version / "os.py").exists():
-        problems.append(f"PYTHONHOME is not set to a Python installation whose lib/{version} "
-                        f"holds the standard library the embedded interpreter needs")
+    homes = [v for v in HOST_PYTHONS if home and (Path(home) / "lib" / f"python{v}" /
+                                                  "os.py").exists()]
+    if not homes:
+        problems.append(f"PYTHONHOME is not set to a Python installation ({', '.join(HOST_PYTHONS)})"
+                        f" whose lib/python3.x holds the standard library the embedded "
+                        f"interpreter needs")
+    elif lib_version in HOST_PYTHONS and lib_version not in homes:
+        problems.append(f"PYTHONHOME {home} holds Python {homes[0]}'s standard library, "
+                        f"LD_PRELOAD Python {lib_version}'s library: give both of one version")
     return problems
 
 

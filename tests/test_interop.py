@@ -125,3 +125,25 @@ def test_fmutool_check_passes(fmus, name):
     version = "3.0" if "fmi3" in fmus[name].parts else "2.0"
     assert f"compliant with FMI-{version}" in out and "No semantic error" in out, out
     assert "ERROR" not in out
+
+
+@pytest.mark.parametrize("version", ["3.10", "3.12", "3.13"])
+def test_host_env_check_takes_any_home_the_fmus_run_with(tmp_path, capsys, version):
+    """A home and a libpython of another Python version, given with --home and --preload (a
+    foreign PYTHONHOME exported to sewfmu's own process would stop its Python from starting):
+    accepted when both are one version of 3.10-3.13, one clear line when they differ."""
+    def install(v: str) -> tuple[Path, Path]:
+        home = tmp_path / f"python{v}"
+        (home / "lib" / f"python{v}").mkdir(parents=True)
+        (home / "lib" / f"python{v}" / "os.py").write_text("")
+        library = home / "lib" / f"libpython{v}.so"
+        library.write_text("")
+        return home, library
+
+    home, library = install(version)
+    assert main(["host-env", "--check", "--home", str(home), "--preload", str(library)]) == 0
+    assert capsys.readouterr().out.strip().endswith("# this environment has all of it")
+    _, other = install("3.11" if version != "3.11" else "3.12")
+    assert main(["host-env", "--check", "--home", str(home), "--preload", str(other)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "give both of one version" in err, err
