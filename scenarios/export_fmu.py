@@ -22,6 +22,7 @@ import uuid
 import zipfile
 from pathlib import Path
 
+from .fmi_calls import kind_of
 from .format import Scenario
 from .values import ScenarioError
 
@@ -89,7 +90,7 @@ def _exposed(scenario: Scenario, components: dict, variables: dict):
     for name in scenario.instances:
         given = scenario.instances[name].parameters
         for v in variables[name].values():
-            kind = _kind(v)
+            kind = kind_of(v)
             if v.causality == "parameter" and kind in ("Real", "Integer"):
                 start = given.get(v.name, v.start)
                 var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="parameter",
@@ -100,7 +101,7 @@ def _exposed(scenario: Scenario, components: dict, variables: dict):
     for column in _recorded(scenario, variables):
         name, _, var_name = column.partition(".")
         v = variables[name][var_name]
-        kind = _kind(v)
+        kind = kind_of(v)
         var = ModelVariable(name=column, type=kind, causality="output",
                             variability="discrete" if kind == "Boolean" else "continuous",
                             initial="calculated", unit=v.unit, description=v.description)
@@ -113,13 +114,7 @@ def _recorded(scenario: Scenario, variables: dict) -> list[str]:
     if scenario.record is not None:
         return list(scenario.record)
     return [f"{name}.{v.name}" for name, vs in variables.items() for v in vs.values()
-            if v.causality == "output" and _kind(v) in ("Real", "Integer", "Boolean")]
-
-
-def _kind(variable) -> str:
-    from .fmi_calls import kind_of
-
-    return kind_of(variable)
+            if v.causality == "output" and kind_of(v) in ("Real", "Integer", "Boolean")]
 
 
 def _start(value, kind: str) -> str:
