@@ -83,14 +83,24 @@ def _checked_output(output: Path) -> Path:
 
 def _exposed(scenario: Scenario, components: dict, variables: dict):
     """The container's variables (besides time) and what each maps to: every parameter of every
-    instance, and the recorded outputs."""
+    instance, every input no connection sets, and the recorded outputs."""
     from fmpy.model_description import ModelVariable
 
     exposed, mappings = [], {}
+    connected = {(c.dst, c.dst_var) for c in scenario.connections}
     for name in scenario.instances:
         given = scenario.instances[name].parameters
         for v in variables[name].values():
             kind = kind_of(v)
+            if v.causality == "input" and (name, v.name) not in connected and kind == "Real":
+                # an input the scenario leaves unconnected: the FMU's input, starting at the
+                # scenario's value (or the FMU's start), for the host to drive
+                var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="input",
+                                    variability="continuous",
+                                    start=_start(given.get(v.name, v.start), kind),
+                                    unit=v.unit, description=v.description)
+                exposed.append(var)
+                mappings[var] = [(components[name], v)]
             if v.causality == "parameter" and kind in ("Real", "Integer"):
                 start = given.get(v.name, v.start)
                 var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="parameter",

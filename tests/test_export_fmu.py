@@ -100,3 +100,29 @@ def test_what_export_fmu_refuses_is_one_line(tmp_path):
         assert proc.returncode == 1 and expected in proc.stderr, proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1
     assert not list(tmp_path.glob("*.fmu"))
+
+
+def test_an_input_the_scenario_leaves_unconnected_is_an_input_of_the_one_fmu(tmp_path, fmu_dir):
+    """The linkage's shaft inputs given values in the scenario (held): the exported FMU
+    exposes them as inputs starting at those values, and runs as sewfmu does."""
+    scenario = tmp_path / "held.toml"
+    scenario.write_text(
+        'description = "the punch behind a linkage held at a given shaft state"\n'
+        'connections = ["linkage.xi -> punch.xi", "linkage.xi_dot -> punch.xi_dot", '
+        '"linkage.xi_ddot -> punch.xi_ddot"]\n'
+        "[experiment]\nstop_time = 0.01\nstep = 1e-4\n"
+        "[instances.linkage]\nfmu = \"PunchLinkage\"\n"
+        "parameters = { phi = 1.0, omega = 50.0, epsilon = 0.0 }\n"
+        "[instances.punch]\nfmu = \"PunchContact\"\n")
+    target = tmp_path / "held.fmu"
+    env = {**os.environ, "SEWFMU_FMU_DIR": str(fmu_dir)}
+    proc = subprocess.run([sys.executable, "-m", "sewfmu", "export-fmu", str(scenario), "-o",
+                           str(target)], capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr
+    inputs = {v.name: float(v.start) for v in read_model_description(str(target)).modelVariables
+              if v.causality == "input"}
+    assert inputs == {"linkage.phi": 1.0, "linkage.omega": 50.0, "linkage.epsilon": 0.0}
+    got = simulate_fmu(str(target), output_interval=1e-4)
+    own = run(load(str(scenario)), {p.stem: p for p in fmu_dir.glob("*.fmu")})
+    for column in ("linkage.xi", "punch.y", "punch.F3"):
+        assert np.array_equal(got[column], own[column]), column
