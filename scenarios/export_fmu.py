@@ -27,8 +27,8 @@ from .format import Scenario
 from .values import ScenarioError
 
 FIXED_STEP_MASTERS = ("jacobi", "gauss-seidel")
-# the container's library names variable types in FMI 3.0's words
-_CONTAINER_TYPES = {"Real": "Float64", "Integer": "Int32"}
+# FMI 3.0's words for FMI 2.0's types (the container's library uses them whatever its version)
+_FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
 
 
 def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
@@ -55,7 +55,7 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
                                           modelDescription=md)
         variables[inst.name] = {v.name: v for v in md.modelVariables}
         units.update({u.name: u for u in md.unitDefinitions})
-    exposed, mappings = _exposed(scenario, components, variables)
+    exposed, mappings = _exposed(scenario, components, variables, fmi)
     connections = [Connection(components[c.src], [variables[c.src][c.src_var]],
                               components[c.dst], [variables[c.dst][c.dst_var]])
                    for c in scenario.connections]
@@ -81,12 +81,19 @@ def _checked_output(output: Path) -> Path:
     return output
 
 
-def _exposed(scenario: Scenario, components: dict, variables: dict):
+def _exposed(scenario: Scenario, components: dict, variables: dict, fmi: int):
     """The container's variables (besides time) and what each maps to: every parameter of every
     instance, every input no connection sets, and the recorded outputs."""
     from fmpy.model_description import ModelVariable
 
     exposed, mappings = [], {}
+
+    def expose(instance: str, v, kind: str, **role) -> None:
+        var = ModelVariable(name=f"{instance}.{v.name}", type=_typed(kind, fmi), unit=v.unit,
+                            description=v.description, **role)
+        exposed.append(var)
+        mappings[var] = [(components[instance], v)]
+
     connected = {(c.dst, c.dst_var) for c in scenario.connections}
     for name in scenario.instances:
         given = scenario.instances[name].parameters
@@ -95,29 +102,23 @@ def _exposed(scenario: Scenario, components: dict, variables: dict):
             if v.causality == "input" and (name, v.name) not in connected and kind == "Real":
                 # an input the scenario leaves unconnected: the FMU's input, starting at the
                 # scenario's value (or the FMU's start), for the host to drive
-                var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="input",
-                                    variability="continuous",
-                                    start=_start(given.get(v.name, v.start), kind),
-                                    unit=v.unit, description=v.description)
-                exposed.append(var)
-                mappings[var] = [(components[name], v)]
-            if v.causality == "parameter" and kind in ("Real", "Integer"):
-                start = given.get(v.name, v.start)
-                var = ModelVariable(name=f"{name}.{v.name}", type=kind, causality="parameter",
-                                    variability="fixed", initial="exact", start=_start(start, kind),
-                                    unit=v.unit, description=v.description)
-                exposed.append(var)
-                mappings[var] = [(components[name], v)]
+                expose(name, v, kind, causality="input", variability="continuous",
+                       start=_start(given.get(v.name, v.start), kind))
+            elif v.causality == "parameter" and kind in ("Real", "Integer"):
+                expose(name, v, kind, causality="parameter", variability="fixed",
+                       initial="exact", start=_start(given.get(v.name, v.start), kind))
     for column in _recorded(scenario, variables):
         name, _, var_name = column.partition(".")
         v = variables[name][var_name]
         kind = kind_of(v)
-        var = ModelVariable(name=column, type=kind, causality="output",
-                            variability="discrete" if kind == "Boolean" else "continuous",
-                            initial="calculated", unit=v.unit, description=v.description)
-        exposed.append(var)
-        mappings[var] = [(components[name], v)]
+        expose(name, v, kind, causality="output", initial="calculated",
+               variability="discrete" if kind == "Boolean" else "continuous")
     return exposed, mappings
+
+
+def _typed(kind: str, fmi: int) -> str:
+    """A type in the words of the container's FMI version (FMI 3.0: Float64, Int32)."""
+    return _FMI3_TYPES.get(kind, kind) if fmi == 3 else kind
 
 
 def _recorded(scenario: Scenario, variables: dict) -> list[str]:
@@ -143,13 +144,10 @@ def _description(scenario: Scenario, fmi: int, stop: float, step: float, exposed
 
     # the container's value reference 0 is the time; FMI 2.0 has no independent variable in
     # co-simulation (and FMI Library refuses one without a start), so there it is a local
-    time = ModelVariable(name="time", type="Real", causality="local", initial="calculated",
-                         variability="continuous", description="simulation time")
-    if fmi == 3:
-        time.causality, time.initial = "independent", None
-        for var in exposed:
-            var.type = {"Real": "Float64", "Integer": "Int32"}.get(var.type, var.type)
-        time.type = "Float64"
+    time = ModelVariable(name="time", type=_typed("Real", fmi), variability="continuous",
+                         description="simulation time",
+                         **({"causality": "independent"} if fmi == 3 else
+                            {"causality": "local", "initial": "calculated"}))
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, f"sewfmu:{scenario.name}:"
                                                      f"{scenario.digest}:{stop!r}:{step!r}")) + "}"
     outputs = [v for v in exposed if v.causality == "output"]
@@ -180,8 +178,7 @@ def _finish(built: Path, output: Path, scenario: Scenario) -> None:
                 config = json.loads(data)
                 for key in ("connections", "variables"):
                     for entry in config[key]:
-                        entry["variableType"] = _CONTAINER_TYPES.get(entry["variableType"],
-                                                                      entry["variableType"])
+                        entry["variableType"] = _typed(entry["variableType"], 3)
                 data = json.dumps(config, indent=1).encode()
             target.writestr(item, data)
         target.writestr("documentation/index.html", _documentation(scenario))

@@ -30,16 +30,22 @@ STALE_DAYS = 30
 MAX_ENTRIES = 64
 
 
-def cache_root() -> Path | None:
-    """The cache folder, made if needed; None where there is none to write."""
+def _configured_root() -> Path | None:
+    """Where the cache is to be (not made here); None where it is turned off."""
     setting = os.environ.get("SEWFMU_CACHE_DIR")
     if setting == "":
         return None
     if setting:
-        root = Path(setting)
-    else:
-        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-        root = Path(base) / "sewfmu" / "fmus"
+        return Path(setting)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "sewfmu" / "fmus"
+
+
+def cache_root() -> Path | None:
+    """The cache folder, made if needed; None where there is none to write."""
+    root = _configured_root()
+    if root is None:
+        return None
     try:
         root.mkdir(parents=True, exist_ok=True)
     except OSError:
@@ -82,7 +88,7 @@ def extract_cached(path: Path) -> str:
 
 def is_cached(folder: str) -> bool:
     """Whether an unzip folder is one of the cache's (it keeps bytecode; a temporary one not)."""
-    root = cache_root()
+    root = _configured_root()
     return root is not None and Path(folder).parent == root
 
 

@@ -178,7 +178,7 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
     from fmpy import simulate_fmu
 
-    from .fmi_calls import LogCollector
+    from .fmi_calls import LogCollector, Status
     from .instances import open_instance
 
     log = LogCollector()
@@ -187,18 +187,21 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     wanted = [v for v in (variables or [v.name for v in instance.md.modelVariables
                                         if v.causality == "output"]) if v in known]
     instance.prepare()
-    instance.instantiate()
     try:
+        instance.instantiate()
         result = simulate_fmu(str(fmu), start_time=experiment.start, stop_time=experiment.stop,
                               output_interval=experiment.step, step_size=experiment.step,
                               input=experiment.inputs, output=wanted, validate=False,
                               fmu_instance=instance.fmu, terminate=False)
     except Exception as err:      # noqa: BLE001 - a failed run is a finding, said in one line
+        # after Fatal (fmpy's own calls raise fmpy's exception) no call may follow, not even
+        # freeing the instance
+        instance.failed = instance.failed or getattr(err, "status", 0) >= Status.FATAL
         errors = [line for line in log.lines if line.startswith(("[ERROR]", "[FATAL]"))]
         raise ScenarioError(f"{instance.md.modelName}: the run for its reference failed: "
                             f"{errors[-1] if errors else err}") from None
     finally:
-        if not instance.failed:
+        if instance.instantiated and not instance.failed:
             instance.release()
     return {name: np.asarray(result[name], dtype=float) for name in result.dtype.names}
 

@@ -41,11 +41,12 @@ def extracted_fmu(path: Path) -> tuple[str, object]:
     return _EXTRACTED[key]
 
 
-# Idle fmpy FMU objects, by unzip folder: a released instance hands its object back and the next
-# instance of that FMU takes it. So the library is loaded, and fmpy binds its functions, once per
-# FMU and concurrent instance rather than once per instance, and a process that runs thousands of
-# sweep points keeps a flat memory (every library object stays referenced until exit: see
-# pythonfmu_host.py). FMI allows a new instantiation from a library whose instance was freed.
+# Idle fmpy FMU objects, by unzip folder: an instance takes one when it is instantiated and hands
+# it back when it is released, for the next instance of that FMU. So the library is loaded, and
+# fmpy binds its functions, once per FMU and concurrent instance rather than once per instance,
+# and a process that runs thousands of sweep points keeps a flat memory (every library object
+# stays referenced until exit: see pythonfmu_host.py). FMI allows a new instantiation from a
+# library whose instance was freed.
 _IDLE: dict[str, list] = {}
 
 
@@ -150,7 +151,7 @@ class Instance:
         raise NotImplementedError
 
     def release(self) -> None:
-        """Terminate and free a healthy instance."""
+        """Terminate and free a healthy instance (instantiated is then false)."""
         raise NotImplementedError
 
     # the per-step calls, each with its arguments bound: they return the status
@@ -255,7 +256,13 @@ class Fmi2Instance(Instance):
         super().__init__(name, md, log)
         self.unzip_dir = unzip_dir
         self.cached = is_cached(unzip_dir)
-        self.fmu = _loaded_fmu(self.FMU_CLASS, unzip_dir, md, name)
+        self.fmu = None               # fmpy's FMU object, held from instantiation to release
+
+    def _take_library(self):
+        """The loaded library to instantiate from (fmpy's FMU object, named as this instance)."""
+        if self.fmu is None:
+            self.fmu = _loaded_fmu(self.FMU_CLASS, self.unzip_dir, self.md, self.name)
+        return self.fmu
 
     def _function(self, call: str):
         """The library's function (fmpy has given it its argument types when loading)."""
@@ -271,13 +278,13 @@ class Fmi2Instance(Instance):
 
     def _instantiate(self) -> None:
         try:
-            self.fmu.instantiate(callbacks=self.log.callbacks, loggingOn=True)
+            self._take_library().instantiate(callbacks=self.log.callbacks, loggingOn=True)
         except Exception:            # fmpy: "Failed to instantiate model" (a NULL instance)
             self.failed = True
             raise FmiCallError("instantiate", Status.FATAL, self) from None
 
     def bind(self) -> None:
-        c = self.component = self.fmu.component
+        self.component = self.fmu.component
         self._set_reals = self._batched("set_real", self.in_vr, self.n_in, self.in_buf)
         self._get_reals = self._batched("get_real", self.out_vr, self.n_out, self.out_buf)
         self._get_booleans = self._batched("get_boolean", self.bool_vr, self.n_bool,
@@ -285,7 +292,6 @@ class Fmi2Instance(Instance):
         self._step = self._function("do_step")
         self._get_state, self._set_state, self._free_state = (
             self._function(k) for k in ("get_state", "set_state", "free_state"))
-        self._c = c
 
     def _batched(self, call: str, vrs, n: int, values):
         """A raw get or set call with all its arguments bound: calling it makes the call."""
@@ -293,7 +299,7 @@ class Fmi2Instance(Instance):
         return partial(self._function(call), self.component, vrs, n, values, *counted)
 
     def _do_step(self, t: float, h: float) -> int:
-        return self._step(self._c, t, h, not self.may_roll_back)
+        return self._step(self.component, t, h, not self.may_roll_back)
 
     def enter_initialization(self, stop: float) -> None:
         self._call("setupExperiment", self.fmu.setupExperiment, None, 0.0, stop)
@@ -310,27 +316,29 @@ class Fmi2Instance(Instance):
         self._call("exitInitializationMode", self.fmu.exitInitializationMode)
 
     def release(self) -> None:
-        """Terminate and free, but keep the library loaded: the extraction cache reuses it, and
-        unloading pythonfmu's binary from a Python host is unsafe (scenarios/pythonfmu_host.py)."""
+        """Terminate and free, but keep the library loaded for the next instance of this FMU
+        (unloading pythonfmu's binary from a Python host is unsafe: pythonfmu_host.py)."""
         try:
             self.fmu.terminate()
         except Exception:
             pass
         self._function("free")(self.fmu.component)
         self.fmu.component = None
-        _IDLE.setdefault(self.unzip_dir, []).append(self.fmu)     # for the next instance
+        self.instantiated = False
+        _IDLE.setdefault(self.unzip_dir, []).append(self.fmu)
+        self.fmu = None
 
     def get_state(self, slot) -> int:
         if slot:
-            self._free_state(self._c, ctypes.byref(slot))
-        return self._get_state(self._c, ctypes.byref(slot))
+            self._free_state(self.component, ctypes.byref(slot))
+        return self._get_state(self.component, ctypes.byref(slot))
 
     def set_state(self, slot) -> int:
-        return self._set_state(self._c, slot)
+        return self._set_state(self.component, slot)
 
     def free_state(self, slot) -> None:
         if slot:
-            self._free_state(self._c, ctypes.byref(slot))
+            self._free_state(self.component, ctypes.byref(slot))
 
 
 class Fmi3Instance(Fmi2Instance):
@@ -348,7 +356,8 @@ class Fmi3Instance(Fmi2Instance):
     def _instantiate(self) -> None:
         # no event mode: sewfmu's masters step in co-simulation's step mode only
         try:
-            self.fmu.instantiate(loggingOn=True, logMessage=self.log.for_fmi3(self.name))
+            self._take_library().instantiate(loggingOn=True,
+                                             logMessage=self.log.for_fmi3(self.name))
         except Exception:            # fmpy: "Failed to instantiate FMU" (a NULL instance)
             self.failed = True
             raise FmiCallError("instantiate", Status.FATAL, self) from None
@@ -361,7 +370,7 @@ class Fmi3Instance(Fmi2Instance):
         self._step_refs = [ctypes.byref(x) for x in self._step_results]
 
     def _do_step(self, t: float, h: float) -> int:
-        return self._step(self._c, t, h, not self.may_roll_back, *self._step_refs)
+        return self._step(self.component, t, h, not self.may_roll_back, *self._step_refs)
 
     def enter_initialization(self, stop: float) -> None:
         self._call("enterInitializationMode", self.fmu.enterInitializationMode, None, 0.0, stop)

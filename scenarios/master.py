@@ -159,19 +159,19 @@ class Master:
             system.settle_loops()
         self.watch = DivergenceWatch(system.in_loops, self.h) if system.in_loops else None
         algorithm.start(system, sc.step)
-        # every step from one step before the last whole revolution on (the analyses' window;
-        # a scenario without a shaft has none)
-        dense_start = sc.last_revolution_start() if self.every > 1 else 0.0
-        if dense_start is None:
-            dense_start = 2 * self.stop
+        # record_every thins the records, but every step is kept from one step before the last
+        # whole revolution on (the analyses' window; a scenario without a shaft has none, and
+        # with record_every = 1 every step is kept anyway)
+        window = sc.last_revolution_start() if self.every > 1 else None
+        if window is None:
+            window = 2 * self.stop                   # after the end: no window
         if algorithm.variable_step:
             rows = None
-            self.dense_k, self.dense_t = None, dense_start - sc.step if self.every > 1 else 0.0
+            self.dense_k, self.dense_t = None, window - sc.step
         else:
-            self.dense_k = max(0, int(dense_start / self.h) - 1) if self.every > 1 else 0
-            self.dense_t = None
-            dense = max(0, self.n_steps - self.dense_k) if self.every > 1 else 0
-            rows = self.n_steps // self.every + 1 + (self.n_steps % self.every != 0) + dense
+            self.dense_k, self.dense_t = max(0, int(window / self.h) - 1), None
+            rows = (self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
+                    + max(0, self.n_steps - self.dense_k))
         self.recorder = Recorder(system.columns, system.plan, rows, sc.source)
         self.recorder.record(0.0)
         self._phase = "step"
@@ -228,7 +228,6 @@ class Master:
             # reports every Python exception as fmi2Fatal and has already dropped its objects)
             if inst.instantiated and not inst.failed:
                 inst.release()
-                inst.instantiated = False
 
     # --- pieces of the run ---------------------------------------------------------------------
     def _open_fmu(self, declaration, log: LogCollector):

@@ -159,6 +159,7 @@ class FakeInstance(Instance):
 
     def release(self):
         self.calls.append("free")
+        self.instantiated = False
 
     def _set_reals(self):
         for vr, value in zip(self.in_vr, self.in_buf):
