@@ -8,10 +8,18 @@ in one place (the host side's counterpart is scenarios/pythonfmu_host.py; docs/f
   getter up directly (the hot path of a co-simulation step).
 - sys.path: pythonfmu puts the instance's resources folder first at every instantiation and never
   takes it out (forget_resources_path).
+- Exit: pythonfmu 0.7.0 releases its interpreter state twice when a Python host exits with the
+  library still loaded (scenarios/pythonfmu_host.py says how); in a Python host the FMU has its
+  own library release that state at Python's exit, first (release_state_at_exit), so that a
+  host that does not do it itself is safe too.
 """
 from __future__ import annotations
 
+import atexit
+import ctypes
+import glob
 import math
+import os
 import sys
 from typing import Any, Callable
 
@@ -86,3 +94,37 @@ def forget_resources_path(resources: str | None) -> None:
     imported by now, so the entry is removed again."""
     if resources and resources in sys.path:
         sys.path.remove(resources)
+
+
+# libraries whose release at exit is registered: process-level bookkeeping of pythonfmu's
+# binary, not model state (an instance's model state lives on the instance)
+_RELEASED_AT_EXIT: set[str] = set()
+
+
+def release_state_at_exit(resources: str | None) -> None:
+    """In a Python host, have this FMU's own library release pythonfmu's interpreter state at
+    Python's exit, while everything is alive (what sewfmu's master does for the libraries it
+    loads; the second release then finds nothing). Not in a host whose interpreter pythonfmu
+    started itself (a C host): there the exit is pythonfmu's own, and clean."""
+    if not resources or not _in_python_process():
+        return
+    for library in glob.glob(os.path.join(resources, os.pardir, "binaries", "*", "*.so")):
+        path = os.path.realpath(library)
+        if path in _RELEASED_AT_EXIT:
+            continue
+        try:        # the library this process has loaded, never a second copy of it
+            handle = ctypes.CDLL(path, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+        except OSError:
+            continue
+        release = getattr(handle, "finalizePythonInterpreter", None)
+        if release is not None:
+            _RELEASED_AT_EXIT.add(path)
+            atexit.register(release)
+
+
+def _in_python_process() -> bool:
+    try:
+        return os.path.basename(os.readlink("/proc/self/exe")).startswith("python")
+    except OSError:
+        return False
+

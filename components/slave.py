@@ -42,7 +42,12 @@ from typing import Any, Callable, Sequence
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
 from .ports import SHAFT_TAYLOR, Port, held_note, input_bound, input_ranges, shaft_inputs
-from .pythonfmu_quirks import ExceptionFreeAccess, describe, forget_resources_path
+from .pythonfmu_quirks import (
+    ExceptionFreeAccess,
+    describe,
+    forget_resources_path,
+    release_state_at_exit,
+)
 
 # a step must start where the last one ended, to within this fraction of max(1 s, |t|, h)
 _TIME_TOLERANCE = 1e-9
@@ -101,6 +106,7 @@ class SewSlave(ExceptionFreeAccess):
         super().__init__(**kwargs)     # the layer's pythonfmu base
         if "logger" in kwargs:         # instantiated by pythonfmu's binary, not by its builder
             forget_resources_path(kwargs.get("resources"))
+            release_state_at_exit(kwargs.get("resources"))
         cls = type(self)
         self.modelName = cls.model_name or cls.__name__
         self.description = (cls.__doc__ or "").strip().splitlines()[0]

@@ -401,3 +401,18 @@ def test_each_fmu_says_what_a_host_needs_and_how_its_sources_build(fmus):
                 assert schema.validate(description), schema.error_log
                 listed = {f.get("name") for f in description.iter("SourceFile")}
                 assert listed == {n[len("sources/"):] for n in sources if n.endswith(".cpp")}
+
+
+def test_in_a_python_host_the_fmu_has_its_library_release_pythonfmu_state_at_exit(fmu_paths):
+    """A host that is a Python process and knows nothing of sewfmu (plain fmpy): the FMU itself
+    registers, once per library, the release of pythonfmu's interpreter state at Python's exit
+    (components/pythonfmu_quirks.py), and the process exits cleanly."""
+    probe = ("import sys\nfrom fmpy import simulate_fmu\n"
+             "for _ in range(3):\n    simulate_fmu(sys.argv[1])\n"
+             "quirks = [m for n, m in sys.modules.items() if n.endswith('.pythonfmu_quirks')]\n"
+             "print(sorted(len(q._RELEASED_AT_EXIT) for q in quirks))\n")
+    proc = subprocess.run([sys.executable, "-c", probe, str(fmu_paths["MainShaft"])],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    # fmpy extracts the FMU anew for each run: three libraries, each registered once
+    assert proc.stdout.strip().splitlines()[-1] == "[3]", proc.stdout
