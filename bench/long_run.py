@@ -7,9 +7,9 @@ import argparse
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import Master
-from sewfmu.scenarios.runner import fmus_for
+from sewfmu.scenarios.cosim.master import Master
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import fmus_for
 
 
 def rss_mib() -> float:

@@ -21,17 +21,17 @@ import tempfile
 import time
 from pathlib import Path
 
-from sewfmu.components.build import ensure_built
 from sewfmu.components.registry import FMUS
-from sewfmu.scenarios.format import Connection, Instance, Scenario
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import monolithic_summary, simulate, summarize
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.fmu_build.build import ensure_built
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
+from sewfmu.scenarios.runs.runner import monolithic_summary, simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
 import math
-from sewfmu.scenarios import punch_monolithic
+from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.analyses import punch
 t_end = 10 * 2 * math.pi / 100.0
 ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,

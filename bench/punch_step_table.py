@@ -10,9 +10,9 @@ import argparse
 
 import numpy as np
 
-from sewfmu.scenarios import punch_monolithic
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.runner import monolithic_summary, simulate, summarize
+from sewfmu.scenarios.analyses.solutions import punch_monolithic
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import monolithic_summary, simulate, summarize
 
 STEPS = (1e-3, 5e-4, 2.5e-4, 1e-4, 5e-5)
 

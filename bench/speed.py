@@ -27,18 +27,18 @@ import tempfile
 import time
 from pathlib import Path
 
-from sewfmu.components.build import ensure_built
 from sewfmu.components.registry import FMUS
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import Master, run
-from sewfmu.scenarios.runner import fmus_for, monolithic_summary, summarize
-from sewfmu.scenarios.sweep import grid_points, run_sweep
+from sewfmu.scenarios.cosim.master import Master, run
+from sewfmu.scenarios.fmu_build.build import ensure_built
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import fmus_for, monolithic_summary, summarize
+from sewfmu.scenarios.runs.sweep import grid_points, run_sweep
 
 ONSET_WITHIN, FORCE_WITHIN = 0.002, 0.002          # ° and N from the tight solution
 
 MONOLITHIC_SCRIPT = """
 import math
-from sewfmu.scenarios import punch_monolithic
+from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.analyses import punch
 t_end = 10 * 2 * math.pi / 100.0
 solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
@@ -76,8 +76,7 @@ def _errors(figures: dict, tight: dict) -> tuple[float, float]:
 
 
 def _monolithic_in_process():
-    from sewfmu.scenarios import punch_monolithic
-    from sewfmu.scenarios.analyses import punch
+    from sewfmu.scenarios.analyses import punch, punch_monolithic
     t_end = 10 * 2 * math.pi / 100.0
     solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
                                       sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-4,
@@ -212,8 +211,8 @@ def sweeps(repeat: int) -> None:
 
 
 _WORKER_MEMORY = """
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.sweep import Point, run_point
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.sweep import Point, run_point
 def rss():
     return next(int(line.split()[1]) for line in open("/proc/self/status")
                 if line.startswith("VmRSS"))

@@ -8,9 +8,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.runner import fmus_for
-from sewfmu.scenarios.sweep import points_of, run_sweep
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import fmus_for
+from sewfmu.scenarios.runs.sweep import points_of, run_sweep
 
 
 def timed(workers: int) -> float:

@@ -8,8 +8,8 @@ run, sweep, compare, load, build and show do what the command line's commands of
 do (docs/api.md). The models are in sewfmu.components, the master and scenarios in
 sewfmu.scenarios.
 """
-from ._version import __version__
-from .api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
+from sewfmu._version import __version__
+from sewfmu.api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
            "Run", "Sweep", "Scenario", "ScenarioError"]

@@ -1,6 +1,6 @@
 """`python -m sewfmu`: the command line."""
 import sys
 
-from .scenarios.cli import main
+from sewfmu.cli import main
 
 sys.exit(main())

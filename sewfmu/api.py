@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .scenarios.analyses import figure_units
-from .scenarios.format import Scenario, ScenarioError
-from .scenarios.loader import catalogue
-from .scenarios.loader import load as _load_scenario
+from sewfmu.scenarios.analyses import figure_units
+from sewfmu.scenarios.format.loader import catalogue
+from sewfmu.scenarios.format.loader import load as _load_scenario
+from sewfmu.scenarios.format.scenario import Scenario, ScenarioError
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
            "Scenario", "ScenarioError"]
@@ -53,7 +53,7 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
 
 def show(scenario: str) -> str:
     """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`)."""
-    from .scenarios.loader import resolve
+    from sewfmu.scenarios.format.loader import resolve
 
     path = resolve(scenario)
     if path.suffix.lower() != ".toml":
@@ -104,7 +104,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs")."""
-    from .scenarios.runner import run_variants, summary_of_runs, write_outputs
+    from sewfmu.scenarios.runs.runner import run_variants, summary_of_runs, write_outputs
 
     sc = load(scenario, set)
     if (plot or animate or report) and out is None:
@@ -178,7 +178,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
     writes (and an interrupted sweep into the same folder resumes)."""
-    from .scenarios.sweep import points_of, run_sweep, sweep_pictures
+    from sewfmu.scenarios.runs.sweep import points_of, run_sweep, sweep_pictures
 
     sc = load(scenario, set)
     if grid is not None and not isinstance(grid, Mapping):
@@ -204,7 +204,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
 
 def _unit_of(sc: Scenario, target: str) -> str:
     """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
-    from .components.registry import parameter_units
+    from sewfmu.components.registry import parameter_units
 
     inst, _, key = target.partition(".")
     if inst == "experiment":
@@ -218,7 +218,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
     scenarios): {figure: {"cosim", "monolithic", "difference", "unit"}}; with `rtol` also the
     monolithic solver at that tolerance ("monolithic_rtol", "rtol_error")."""
-    from .scenarios.runner import compare as compare_rows
+    from sewfmu.scenarios.runs.runner import compare as compare_rows
 
     sc = load(scenario, set)
     units = {**figure_units(sc.analysis), "wall_time_s": "s"}
@@ -239,9 +239,9 @@ def build(fmi: int = 2, dest: str | Path | None = None,
           names: list[str] | None = None) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
     fmus/fmi3/); return their paths."""
-    from .components.build import build_fmu, default_fmu_dir
-    from .components.registry import FMUS
-    from .scenarios.values import did_you_mean
+    from sewfmu.components.registry import FMUS
+    from sewfmu.scenarios.fmu_build.build import build_fmu, default_fmu_dir
+    from sewfmu.scenarios.format.values import did_you_mean
 
     if isinstance(fmi, bool) or fmi not in (2, 3):
         raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")

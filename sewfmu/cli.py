@@ -6,10 +6,10 @@ import os
 import sys
 from pathlib import Path
 
-from .._version import __version__
-from .interrupt import Interrupted, interrupt_on_sigterm
-from .loader import catalogue, load
-from .values import ScenarioError, label_of, parse_value
+from sewfmu._version import __version__
+from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_sigterm
+from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
 
 
 def _load_with_sets(name: str, sets: list[str]):
@@ -23,7 +23,7 @@ def _load_with_sets(name: str, sets: list[str]):
 
 
 def cmd_build(args) -> None:
-    from ..components.build import build_all, default_fmu_dir
+    from sewfmu.scenarios.fmu_build.build import build_all, default_fmu_dir
 
     dest = default_fmu_dir(args.fmi, Path(args.dest) if args.dest else None)
     for path in build_all(dest, fmi=args.fmi):
@@ -33,14 +33,14 @@ def cmd_build(args) -> None:
 def cmd_list(args) -> None:
     import importlib
 
-    from ..components.registry import FMUS
+    from sewfmu.components.registry import FMUS
 
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
         doc = getattr(importlib.import_module(f"..components.{module}", __package__),
                       slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
-    from .analyses import studies
+    from sewfmu.scenarios.analyses import studies
 
     print("scenarios:")
     for name, path in sorted(catalogue().items()):
@@ -51,8 +51,8 @@ def cmd_list(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from .analyses import studies
-    from .runner import run_scenario, run_study
+    from sewfmu.scenarios.analyses import studies
+    from sewfmu.scenarios.runs.runner import run_scenario, run_study
 
     if args.scenario in studies():
         if args.set:
@@ -65,7 +65,7 @@ def cmd_run(args) -> None:
         print(f"{args.scenario}: results in {out}/")
         print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
         return
-    from .progress import TerminalProgress
+    from sewfmu.scenarios.runs.progress import TerminalProgress
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
@@ -90,7 +90,7 @@ def cmd_run(args) -> None:
 
 
 def cmd_compare(args) -> None:
-    from .runner import compare
+    from sewfmu.scenarios.runs.runner import compare
 
     scenario = _load_with_sets(args.scenario, args.set)
     rows = compare(scenario, rtol=args.rtol)
@@ -108,7 +108,7 @@ def cmd_compare(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from .sweep import parse_grid_option, points_of, run_sweep, sweep_pictures
+    from sewfmu.scenarios.runs.sweep import parse_grid_option, points_of, run_sweep, sweep_pictures
 
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
@@ -129,21 +129,21 @@ def cmd_sweep(args) -> None:
 
 
 def cmd_show(args) -> None:
-    from ..api import show
+    from sewfmu.api import show
 
     sys.stdout.write(show(args.scenario))
 
 
 def cmd_export_ssp(args) -> None:
-    from .runner import export
+    from sewfmu.scenarios.runs.runner import export
 
     scenario = _load_with_sets(args.scenario, args.set)
     print(export(scenario, Path(args.output)))
 
 
 def cmd_export_fmu(args) -> None:
-    from .export_fmu import export_fmu
-    from .runner import fmus_for
+    from sewfmu.scenarios.interop.export_fmu import export_fmu
+    from sewfmu.scenarios.runs.runner import fmus_for
 
     scenario = _load_with_sets(args.scenario, args.set)
     scenario.fmi = args.fmi            # the components of the FMI version of the container
@@ -153,9 +153,9 @@ def cmd_export_fmu(args) -> None:
 def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
-    from ..components.registry import FMUS
-    from . import regression as references
-    from .runner import fmus_for_names
+    from sewfmu.components.registry import FMUS
+    from sewfmu.scenarios.references import regression as references
+    from sewfmu.scenarios.runs.runner import fmus_for_names
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)
     folder = Path(args.refs) if args.refs else references.REFERENCE_DIR
@@ -166,7 +166,7 @@ def cmd_references(args) -> None:
         for written in references.regenerate(paths, folder):
             print(f"wrote {written}")
         return
-    from .reference_check import tolerance
+    from sewfmu.scenarios.references.reference_check import tolerance
     rtol, atol = tolerance(args.rtol, "--rtol"), tolerance(args.atol, "--atol")
     problems = [p for name in FMUS for p in references.check(name, paths[name], folder, rtol, atol)]
     for line in problems:
@@ -178,7 +178,7 @@ def cmd_references(args) -> None:
 
 def _references_of_files(args) -> None:
     """`sewfmu references --fmu PATH ...`: any FMU against its references (reference_check.py)."""
-    from . import fmu_reference, reference_check
+    from sewfmu.scenarios.references import fmu_reference, reference_check
 
     if args.regenerate:
         if not args.refs:
@@ -210,7 +210,7 @@ def _references_of_files(args) -> None:
 def cmd_host_env(args) -> None:
     import os
 
-    from .hosts import check_host_environment, host_environment
+    from sewfmu.scenarios.interop.hosts import check_host_environment, host_environment
 
     env = host_environment()
     print("# what a host that is not a Python process (the ecos tool, an FMI tool in C++ or")
@@ -229,7 +229,7 @@ def cmd_host_env(args) -> None:
 
 
 def cmd_crosscheck(args) -> None:
-    from .runner import crosscheck
+    from sewfmu.scenarios.runs.runner import crosscheck
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_{args.host}"
@@ -396,11 +396,11 @@ def main(argv=None) -> int:
 
 def explain(err: Exception, command: str) -> str:
     """An error as one line that says what was wrong and where."""
-    from .analyses import RoleError, RunTooShort
-    from .divergence import Diverged
-    from .fmi_calls import CosimError
-    from .hosts import HostError
-    from .outputs import OutputError
+    from sewfmu.scenarios.analyses import RoleError, RunTooShort
+    from sewfmu.scenarios.cosim.divergence import Diverged
+    from sewfmu.scenarios.cosim.fmi_calls import CosimError
+    from sewfmu.scenarios.files.outputs import OutputError
+    from sewfmu.scenarios.interop.hosts import HostError
 
     if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,
                         RoleError, Diverged)):

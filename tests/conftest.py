@@ -9,7 +9,7 @@ import tempfile
 import pytest
 from hypothesis import settings
 
-from sewfmu.components.build import build_all, default_fmu_dir
+from sewfmu.scenarios.fmu_build.build import build_all, default_fmu_dir
 
 # Property tests draw the same examples on every run ("ci", the default), so that a red CI names a
 # real, reproducible failure; HYPOTHESIS_PROFILE=explore draws new ones, many more of them.

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sewfmu.scenarios.fmi_calls import Status
-from sewfmu.scenarios.format import Connection, Scenario
-from sewfmu.scenarios.format import Instance as Declaration
-from sewfmu.scenarios.instances import Instance
+from sewfmu.scenarios.cosim.fmi_calls import Status
+from sewfmu.scenarios.cosim.instances import Instance
+from sewfmu.scenarios.format.scenario import Connection, Scenario
+from sewfmu.scenarios.format.scenario import Instance as Declaration
 
 
 @dataclass

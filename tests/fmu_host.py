@@ -10,9 +10,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
-from sewfmu.scenarios.fmi_calls import LogCollector, kind_of
-from sewfmu.scenarios.instances import extracted_fmu
-from sewfmu.scenarios.pythonfmu_host import release_at_exit
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector, kind_of
+from sewfmu.scenarios.cosim.instances import extracted_fmu
+from sewfmu.scenarios.cosim.pythonfmu_host import release_at_exit
 
 OPEN_HOSTS: list["Host"] = []
 

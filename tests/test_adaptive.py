@@ -3,10 +3,10 @@ read from non-uniform samples; rejected steps rolled back exactly; the one-way s
 import numpy as np
 import pytest
 
-from sewfmu.scenarios.fixed_step import Jacobi
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import Master, run
-from sewfmu.scenarios.runner import monolithic_summary, summarize
+from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
+from sewfmu.scenarios.cosim.master import Master, run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import monolithic_summary, summarize
 
 
 def _adaptive(fmu_paths, name="punch_drive", tolerance=None):

@@ -9,10 +9,10 @@ from scipy.linalg import eigh
 
 from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
 from sewfmu.scenarios.analyses.carriage import periodic_response, resonance_study
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import summarize
-from sewfmu.scenarios.sampling import sampled
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import summarize
 
 
 def _energy_stiffness(model: CarriageModal) -> np.ndarray:

@@ -11,10 +11,10 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from sewfmu.scenarios.hosts import host_environment
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import RunResult, run
-from sewfmu.scenarios.runner import summarize
+from sewfmu.scenarios.cosim.master import RunResult, run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.interop.hosts import host_environment
+from sewfmu.scenarios.runs.runner import summarize
 
 pytestmark = pytest.mark.slow
 FIGURES = ("contact_onset_deg", "contact_loss_deg", "F2_peak", "F2_weld_mean")

@@ -19,11 +19,11 @@ from pathlib import Path
 
 import pytest
 
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import ScenarioError
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
-from sewfmu.scenarios.workers import WorkerDied, run_tasks
+from sewfmu.cli import main
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.runs.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
+from sewfmu.scenarios.runs.workers import WorkerDied, run_tasks
 
 pytestmark = [pytest.mark.slow]
 

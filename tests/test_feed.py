@@ -8,10 +8,10 @@ import pytest
 from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.scenarios.analyses.feed import ratio_study
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import summarize
-from sewfmu.scenarios.sampling import sampled
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import summarize
 
 PHI1 = np.radians(np.arange(0.0, 360.0, 0.1))
 

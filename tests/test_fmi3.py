@@ -14,9 +14,9 @@ from fmpy.fmi1 import FMICallException
 
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.registry import FMUS
-from sewfmu.scenarios import regression as references
-from sewfmu.scenarios.loader import catalogue, load
-from sewfmu.scenarios.runner import export, simulate, variants
+from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.references import regression as references
+from sewfmu.scenarios.runs.runner import export, simulate, variants
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent
@@ -114,8 +114,8 @@ _SIDE_BY_SIDE = """
 import sys
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from sewfmu.scenarios.fmi_calls import LogCollector
-from sewfmu.scenarios.instances import open_instance
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector
+from sewfmu.scenarios.cosim.instances import open_instance
 instances = []
 for path in sys.argv[2:]:
     inst = open_instance("fmi", Path(path), LogCollector())
@@ -165,7 +165,7 @@ def test_sewfmu_build_fmi3_writes_into_the_fmi3_folder(tmp_path):
 
 @pytest.mark.parametrize("value", ["4", "true", "2.5", "\"3\""])
 def test_another_fmi_version_is_one_clear_line(capsys, tmp_path, value):
-    from sewfmu.scenarios.cli import main
+    from sewfmu.cli import main
     assert main(["run", "punch_drive", "--set", f"experiment.fmi={value}",
                  "--out", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err.strip()

@@ -158,8 +158,8 @@ _CYCLES = """
 import gc, json, sys, tracemalloc
 sys.path.insert(0, sys.argv[1])
 from pathlib import Path
-from sewfmu.scenarios.fmi_calls import LogCollector
-from sewfmu.scenarios.instances import open_instance
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector
+from sewfmu.scenarios.cosim.instances import open_instance
 log = LogCollector()
 inst = open_instance("cycle", Path(sys.argv[2]), log)       # FMI 2.0 or 3.0: one library object
 inst.prepare()

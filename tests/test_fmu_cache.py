@@ -7,15 +7,15 @@ import sys
 import time
 from pathlib import Path
 
-from sewfmu.scenarios import fmu_cache
+from sewfmu.scenarios.cosim import fmu_cache
 
 REPO = Path(__file__).resolve().parent.parent
 
 _EXTRACT_AND_RUN = """
 import sys
 from pathlib import Path
-from sewfmu.scenarios.fmi_calls import LogCollector
-from sewfmu.scenarios.instances import open_instance
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector
+from sewfmu.scenarios.cosim.instances import open_instance
 inst = open_instance("shaft", Path(sys.argv[1]), LogCollector())
 inst.real_out = ["phi"]
 inst.prepare(); inst.instantiate(); inst.enter_initialization(1.0); inst.exit_initialization()

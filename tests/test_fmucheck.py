@@ -17,9 +17,9 @@ import pytest
 
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.registry import FMUS
-from sewfmu.scenarios.fmu_reference import read_options
-from sewfmu.scenarios.hosts import host_environment
-from sewfmu.scenarios.regression import REFERENCE_DIR
+from sewfmu.scenarios.interop.hosts import host_environment
+from sewfmu.scenarios.references.fmu_reference import read_options
+from sewfmu.scenarios.references.regression import REFERENCE_DIR
 
 FMUCHECK = os.environ.get("SEWFMU_FMUCHECK", "")
 pytestmark = [pytest.mark.slow, pytest.mark.interop, pytest.mark.skipif(

@@ -257,7 +257,7 @@ def test_instances_in_one_process_are_independent(fmus):
 def test_ensure_built_rebuilds_only_what_is_missing_or_stale(fmu_dir, tmp_path):
     import shutil
 
-    from sewfmu.components.build import ensure_built
+    from sewfmu.scenarios.fmu_build.build import ensure_built
 
     target = tmp_path / "fmus"
     shutil.copytree(fmu_dir, target)
@@ -274,9 +274,9 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
     or the FMU's embedded pythonfmu (without binaries) would serve later builds."""
     import zipfile
 
-    from sewfmu.components.build import build_fmu
-    from sewfmu.scenarios.loader import load
-    from sewfmu.scenarios.master import run
+    from sewfmu.scenarios.cosim.master import run
+    from sewfmu.scenarios.fmu_build.build import build_fmu
+    from sewfmu.scenarios.format.loader import load
 
     before = list(sys.path)
     sc = load("punch_drive")
@@ -297,9 +297,9 @@ def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_di
     folder = fmu3_dir if fmi == 3 else fmu_dir
     code = (f"import zipfile\n"
             f"from pathlib import Path\n"
-            f"from sewfmu.scenarios.loader import load\n"
-            f"from sewfmu.scenarios.master import run\n"
-            f"from sewfmu.components.build import build_fmu\n"
+            f"from sewfmu.scenarios.format.loader import load\n"
+            f"from sewfmu.scenarios.cosim.master import run\n"
+            f"from sewfmu.scenarios.fmu_build.build import build_fmu\n"
             f"sc = load('punch_drive'); sc.revolutions = 1\n"
             f"run(sc, {{p.stem: p for p in Path({str(folder)!r}).glob('*.fmu')}})\n"
             f"path = build_fmu('MainShaft', Path({str(tmp_path)!r}), fmi={fmi})\n"

@@ -10,13 +10,13 @@ from pathlib import Path
 
 import pytest
 
-from sewfmu.components.build import PACKAGE_DIR, build_fmu
+from sewfmu.cli import main
 from sewfmu.components.registry import FMUS
-from sewfmu.scenarios import regression as references
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.hosts import check_host_environment, host_environment
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.runner import crosscheck, export
+from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.interop.hosts import check_host_environment, host_environment
+from sewfmu.scenarios.references import regression as references
+from sewfmu.scenarios.runs.runner import crosscheck, export
 
 pytestmark = [pytest.mark.slow, pytest.mark.interop]
 
@@ -104,7 +104,7 @@ def test_a_changed_fmu_is_caught_by_its_reference(tmp_path):
     """The reference check is not blind: a MainShaft built from code whose default speed is 1 %
     higher fails against the reference."""
     source = tmp_path / "components"
-    shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(MODEL_CODE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
     code = (source / "shaft.py").read_text()
     assert "parameter(100.0," in code
     (source / "shaft.py").write_text(code.replace("parameter(100.0,", "parameter(101.0,"))

@@ -56,7 +56,7 @@ def test_only_sewfmu_lands_at_the_top_of_site_packages(plain_install):
                        for top in ("components", "scenarios")
                        for p in (plain_install / "sewfmu" / top).rglob("__init__.py"))
     assert installed == ours
-    assert (plain_install / "sewfmu" / "scenarios" / "regression_references" / "PunchContact"
+    assert (plain_install / "sewfmu" / "scenarios" / "references" / "regression_references" / "PunchContact"
             / "PunchContact_ref.csv").exists()
     assert (plain_install / "sewfmu" / "scenarios" / "catalogue" / "punch_drive.toml").exists()
 
@@ -95,7 +95,7 @@ def test_version_from_one_place(plain_install, tmp_path):
     assert proc.stdout.strip() == f"sewfmu {sewfmu.__version__}"
     meta = next(plain_install.glob("sewfmu-*.dist-info")) / "METADATA"
     assert f"Version: {sewfmu.__version__}" in meta.read_text()
-    from sewfmu.components.build import VERSION
+    from sewfmu.scenarios.fmu_build.build import VERSION
     assert VERSION == sewfmu.__version__
     # nowhere else: pyproject reads it from sewfmu/_version.py
     assert "version =" not in (REPO / "pyproject.toml").read_text().split("[project]")[1] \
@@ -113,8 +113,8 @@ def test_references_work_from_a_plain_install_in_any_folder(plain_install, tmp_p
 def test_show_prints_a_scenario_that_loads_back_unchanged(name, tmp_path):
     """`sewfmu show NAME > mine.toml`: the file is the same scenario (instances, parameters,
     connections, experiment, compare, sweep), under the new file's name."""
-    from sewfmu.scenarios.cli import main
-    from sewfmu.scenarios.experiment import experiment_of
+    from sewfmu.cli import main
+    from sewfmu.scenarios.format.experiment import experiment_of
 
     out = tmp_path / "mine.toml"
     import contextlib

@@ -9,11 +9,11 @@ z ← (I - hM/2)⁻¹ (I + hM/2) z, which keeps |z| = 1.
 import numpy as np
 import pytest
 
-from sewfmu.scenarios.algorithm_settings import SETTINGS
-from sewfmu.scenarios.fmi_calls import CosimError, Status
-from sewfmu.scenarios.format import ScenarioError
-from sewfmu.scenarios.master import Master
-from sewfmu.scenarios.masters import ALGORITHMS
+from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
+from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
+from sewfmu.scenarios.cosim.master import Master
+from sewfmu.scenarios.format.master_settings import SETTINGS
+from sewfmu.scenarios.format.scenario import ScenarioError
 from tests.fake_fmu import Failing, Integrator, Switch, fake_scenario, maker
 
 M = np.array([[0.0, 1.0], [-1.0, 0.0]])

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from sewfmu.cli import main
 from sewfmu.components.feed import FeedLinkage
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.takeup import TakeupLinkage
 from sewfmu.scenarios.analyses import mechanism
 from sewfmu.scenarios.animations import FRAMES, animate
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.loader import catalogue, load
-from sewfmu.scenarios.runner import simulate
+from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.runs.runner import simulate
 
 pytestmark = [pytest.mark.slow]
 

@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from sewfmu.components.build import current_version
+from sewfmu.cli import main
 from sewfmu.components.parameters import parameter_info
 from sewfmu.components.punch_contact import PunchContactParams
-from sewfmu.scenarios import punch_monolithic
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.loader import load, resolve
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import monolithic_summary, run_scenario, summarize
+from sewfmu.scenarios.analyses.solutions import punch_monolithic
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.fmu_build.build import current_version
+from sewfmu.scenarios.format.loader import load, resolve
+from sewfmu.scenarios.runs.runner import monolithic_summary, run_scenario, summarize
 
 
 @pytest.fixture(scope="module")

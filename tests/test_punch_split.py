@@ -8,11 +8,11 @@ import pytest
 
 from sewfmu.components.punch_contact import PunchContact, PunchContactParams
 from sewfmu.components.punch_split import Fabric, FabricParams, PunchBody
-from sewfmu.scenarios import coupling
-from sewfmu.scenarios.divergence import Diverged
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import Master, run
-from sewfmu.scenarios.runner import monolithic_summary, summarize
+from sewfmu.scenarios.cosim.algorithms import iterative as coupling
+from sewfmu.scenarios.cosim.divergence import Diverged
+from sewfmu.scenarios.cosim.master import Master, run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import monolithic_summary, summarize
 
 
 def _split(fmu_paths, master=None, step=None, **settings):
@@ -161,6 +161,6 @@ def test_the_body_alone_moves_as_the_punch_without_the_fabric():
 
 
 def test_gauss_seidel_refuses_a_feedback_loop(fmu_paths):
-    from sewfmu.scenarios.format import ScenarioError
+    from sewfmu.scenarios.format.scenario import ScenarioError
     with pytest.raises(ScenarioError, match="gauss-seidel.*feedback loop of body, fabric"):
         _split(fmu_paths, master="gauss-seidel")

@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sewfmu.components.build import PACKAGE_DIR, build_fmu
-from sewfmu.components.carried_reference import LS_REF, MANIFEST
-from sewfmu.scenarios import reference_check
-from sewfmu.scenarios.values import ScenarioError
+from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
+from sewfmu.scenarios.fmu_build.carried_reference import LS_REF, MANIFEST
+from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.references import reference_check
 
 pytestmark = pytest.mark.slow
 REPO = Path(__file__).resolve().parent.parent
@@ -161,7 +161,7 @@ def test_sewfmus_fmus_carry_their_reference_and_a_changed_model_is_caught(fmus, 
     # gravity switched off in a copy of the model code: the FMU's own (carried) reference,
     # made from that code, agrees with it; sewfmu's shipped reference catches the change
     source = tmp_path / "components"
-    shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(MODEL_CODE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
     code = (source / "punch_contact.py").read_text()
     (source / "punch_contact.py").write_text(code.replace("GRAVITY = 9.81", "GRAVITY = 0.0"))
     fmi = 3 if "fmi3" in next(iter(fmus.values())).parts else 2

@@ -11,13 +11,13 @@ from fmpy.fmi1 import FMICallException
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from sewfmu.components.build import PACKAGE_DIR, build_fmu
+from sewfmu.cli import main
 from sewfmu.components.punch_contact import GRAVITY, PunchContact, PunchContactParams
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.fmi_calls import CosimError
-from sewfmu.scenarios.format import ScenarioError
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import Master
+from sewfmu.scenarios.cosim.fmi_calls import CosimError
+from sewfmu.scenarios.cosim.master import Master
+from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.scenario import ScenarioError
 from tests.fmu_host import Host
 
 
@@ -194,7 +194,7 @@ def test_two_builds_with_different_code_each_run_their_own(fmu_paths, tmp_path):
     """A copy of the model code with gravity switched off, built into a second PunchContact:
     loaded beside the original in this process, each settles where its own code says."""
     source = tmp_path / "components"
-    shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(MODEL_CODE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
     code = (source / "punch_contact.py").read_text()
     (source / "punch_contact.py").write_text(code.replace("GRAVITY = 9.81", "GRAVITY = 0.0"))
     weightless = build_fmu("PunchContact", tmp_path / "fmus", source=source)

@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
+from sewfmu.cli import explain, main
 from sewfmu.components.carriage import CarriageModal, CarriageParams
 from sewfmu.scenarios.analyses import RunTooShort
-from sewfmu.scenarios.cli import explain, main
-from sewfmu.scenarios.divergence import Diverged, DivergenceWatch
-from sewfmu.scenarios.format import ScenarioError
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import run_scenario, summarize
+from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.runs.runner import run_scenario, summarize
 from tests.fmu_host import Host
 
 
@@ -334,7 +334,7 @@ def test_an_ssp_component_named_as_a_path_is_refused(fmu_paths, tmp_path):
 
 
 def test_zip_bombs_links_and_member_floods_are_refused(tmp_path, monkeypatch):
-    from sewfmu.scenarios import ssp_import
+    from sewfmu.scenarios.format import ssp_import
 
     monkeypatch.setattr(ssp_import, "MAX_UNPACKED_BYTES", 1 << 20)
     bomb = _ssp_with(tmp_path, {"SystemStructure.ssd": "<x/>", "zeros": b"\0" * (8 << 20)})

@@ -3,10 +3,10 @@ names too) gives the same figures; roles bound to the wrong FMU type, ambiguous 
 analyses and a shaft that is not a MainShaft are errors naming what is wrong."""
 import pytest
 
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.format import ScenarioError
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.runner import run_scenario
+from sewfmu.cli import main
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.runs.runner import run_scenario
 from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 
 RENAMED = {"shaft": "вал", "linkage": "рычаг", "punch": "ram"}

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from sewfmu.scenarios.cli import main
-from sewfmu.scenarios.loader import catalogue, load
-from sewfmu.scenarios.runner import export, simulate, summarize
+from sewfmu.cli import main
+from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.runs.runner import export, simulate, summarize
 
 SKIP = ("scenario", "master", "step", "stop_time", "wall_time_s")
 

@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.sweep import POINTS_FILE, grid_points, run_sweep
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.sweep import POINTS_FILE, grid_points, run_sweep
 
 GRID = {"shaft.omega0": [100.0, 250.0], "punch.F30": [0.0, 8.0]}
 
@@ -74,6 +74,6 @@ def test_the_workers_preload_modules_that_exist():
     would then import sewfmu itself."""
     import importlib
 
-    from sewfmu.scenarios.sweep import WORKER_PRELOAD
+    from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD
     for name in WORKER_PRELOAD:
         importlib.import_module(name)

@@ -8,11 +8,11 @@ import pytest
 
 from sewfmu.components.kinematics import AssemblyError, point_on_link
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
-from sewfmu.scenarios.loader import load
-from sewfmu.scenarios.master import run
-from sewfmu.scenarios.runner import summarize
-from sewfmu.scenarios.sampling import sampled
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.runs.runner import summarize
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))
 
@@ -126,7 +126,7 @@ def test_takeup_that_cannot_assemble_names_the_crank_angle():
 def test_studies_run_from_the_command_line(tmp_path, capsys):
     import json
 
-    from sewfmu.scenarios.cli import main
+    from sewfmu.cli import main
 
     assert main(["run", "takeup_tolerance", "--out", str(tmp_path / "t")]) == 0
     summary = json.loads((tmp_path / "t" / "summary.json").read_text())

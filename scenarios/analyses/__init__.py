@@ -69,9 +69,12 @@ class Mechanism:
 
 @functools.cache
 def mechanisms() -> dict[str, Mechanism]:
-    """Every analysis module of this package by name -> its MECHANISM."""
+    """Every analysis module of this package by name -> its MECHANISM (sub-packages hold what
+    the analyses share)."""
     found = {}
     for info in pkgutil.iter_modules(__path__):
+        if info.ispkg:
+            continue
         found[info.name] = importlib.import_module(f"{__name__}.{info.name}").MECHANISM
     return found
 

@@ -14,11 +14,19 @@ import textwrap
 
 import numpy as np
 
-from ...components.carriage import CarriageDrive, CarriageModal, CarriageParams
-from ...components.oscillator import DampedOscillator
-from ...components.parameters import with_values
-from ..sampling import sampled
-from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
+from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams
+from sewfmu.components.oscillator import DampedOscillator
+from sewfmu.components.parameters import with_values
+from sewfmu.scenarios.analyses import (
+    Mechanism,
+    RegressionCase,
+    Study,
+    column,
+    last_revolution,
+    parameters,
+    shaft_at,
+)
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"omega1": "rad/s", "omega2": "rad/s", "stitch_rate_per_min": "1/min",

@@ -13,11 +13,19 @@ import textwrap
 
 import numpy as np
 
-from ...components.feed import FeedLinkage, FeedParams
-from ...components.kinematics import AssemblyError
-from ...components.parameters import with_values
-from ..sampling import sampled
-from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
+from sewfmu.components.feed import FeedLinkage, FeedParams
+from sewfmu.components.kinematics import AssemblyError
+from sewfmu.components.parameters import with_values
+from sewfmu.scenarios.analyses import (
+    Mechanism,
+    RegressionCase,
+    Study,
+    column,
+    last_revolution,
+    parameters,
+    shaft_at,
+)
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "deg",

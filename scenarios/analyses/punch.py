@@ -16,8 +16,15 @@ import math
 
 import numpy as np
 
-from ..sampling import sampled
-from . import Mechanism, RegressionCase, column, last_revolution, shaft_at, whole_revolution
+from sewfmu.scenarios.analyses import (
+    Mechanism,
+    RegressionCase,
+    column,
+    last_revolution,
+    shaft_at,
+    whole_revolution,
+)
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"contact_onset_deg": "deg", "contact_loss_deg": "deg", "contact_duration_deg": "deg",
@@ -152,7 +159,7 @@ def plot(curves, path, title: str) -> None:
 
 def excitation(t) -> dict:
     """The six-bar's excitation of the punch at ω = 200 s⁻¹ (its regression input)."""
-    from ...components.punch_linkage import PunchLinkage
+    from sewfmu.components.punch_linkage import PunchLinkage
 
     e = sampled(PunchLinkage().motion, 200.0 * t, 200.0, 0.0)
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}

@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 
-from . import Mechanism, RegressionCase
-from .punch import FIGURES, excitation, plot, summary_of_monolithic, summary_of_run  # noqa: F401
+from sewfmu.scenarios.analyses import Mechanism, RegressionCase
+from sewfmu.scenarios.analyses.punch import FIGURES, excitation, plot, summary_of_monolithic, summary_of_run  # noqa: F401
 
 
 def body_inputs(t) -> dict:

@@ -11,11 +11,19 @@ import math
 
 import numpy as np
 
-from ...components.kinematics import AssemblyError
-from ...components.parameters import with_values
-from ...components.takeup import TakeupLinkage, TakeupParams
-from ..sampling import sampled
-from . import Mechanism, RegressionCase, Study, column, last_revolution, parameters, shaft_at
+from sewfmu.components.kinematics import AssemblyError
+from sewfmu.components.parameters import with_values
+from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios.analyses import (
+    Mechanism,
+    RegressionCase,
+    Study,
+    column,
+    last_revolution,
+    parameters,
+    shaft_at,
+)
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"path_extent_z_mm": "mm", "path_extent_x_mm": "mm", "stroke_mm": "mm",

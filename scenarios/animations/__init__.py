@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import analyses
+from sewfmu.scenarios import analyses
 
 FRAMES = 36
 FRAME_MS = 90                 # display time of a frame

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...components.carriage import CarriageModal, CarriageParams
-from ...components.parameters import with_values
-from .. import analyses
-from . import angle_label
+from sewfmu.components.carriage import CarriageModal, CarriageParams
+from sewfmu.components.parameters import with_values
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.animations import angle_label
 
 MM = 1e3
 TABLE = (4.0, 2.0)       # mm: the table as drawn (width, height)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...components.feed import FeedLinkage, FeedParams
-from ...components.parameters import with_values
-from .. import analyses
-from . import angle_label, reach
+from sewfmu.components.feed import FeedLinkage, FeedParams
+from sewfmu.components.parameters import with_values
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.animations import angle_label, reach
 
 MM = 1e3
 CHAINS = (("A", "B", "C", "D"), ("D", "E"), ("E", "F", "H", "G"), ("G", "N", "K", "A"), ("H", "M"))

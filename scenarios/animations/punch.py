@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...components.parameters import with_values
-from ...components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
-from .. import analyses
-from ..analyses.punch import signal
-from . import angle_label
+from sewfmu.components.parameters import with_values
+from sewfmu.components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.analyses.punch import signal
+from sewfmu.scenarios.animations import angle_label
 
 MM = 1e3
 HOLDER = 14.0      # mm: slider to punch tip with spring 11 unloaded (Δ = 0), as drawn

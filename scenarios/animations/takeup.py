@@ -3,10 +3,10 @@ linkage model at the recorded crank angle) and the eye E at its recorded positio
 willow leaf."""
 from __future__ import annotations
 
-from ...components.parameters import with_values
-from ...components.takeup import TakeupLinkage, TakeupParams
-from .. import analyses
-from . import angle_label, reach
+from sewfmu.components.parameters import with_values
+from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.animations import angle_label, reach
 
 MM = 1e3
 

@@ -20,10 +20,10 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2Real, fmi2ValueReference
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
-from .fmi_calls import FmiCallError, LogCollector, Status, failed, kind_of
-from .fmu_cache import extract_cached, is_cached
-from .format import ScenarioError
-from .pythonfmu_host import instantiating, release_at_exit
+from sewfmu.scenarios.cosim.fmi_calls import FmiCallError, LogCollector, Status, failed, kind_of
+from sewfmu.scenarios.cosim.fmu_cache import extract_cached, is_cached
+from sewfmu.scenarios.cosim.pythonfmu_host import instantiating, release_at_exit
+from sewfmu.scenarios.format.scenario import ScenarioError
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Instance.release), so it is loaded from one place only.

@@ -21,15 +21,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import interrupt
-from .divergence import DivergenceWatch
-from .fmi_calls import CosimError, FmiCallError, LogCollector, reason
-from .format import Scenario, ScenarioError
-from .instances import open_instance
-from .masters import ALGORITHMS
-from .recorder import Recorder
-from .rollback import Rollback
-from .system import System
+from sewfmu.scenarios.cosim import interrupt
+from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
+from sewfmu.scenarios.cosim.divergence import DivergenceWatch
+from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError, LogCollector, reason
+from sewfmu.scenarios.cosim.instances import open_instance
+from sewfmu.scenarios.cosim.recorder import Recorder
+from sewfmu.scenarios.cosim.rollback import Rollback
+from sewfmu.scenarios.cosim.system import System
+from sewfmu.scenarios.format.scenario import Scenario, ScenarioError
 
 MAX_STEPS = 10**9
 

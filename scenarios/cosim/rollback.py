@@ -8,7 +8,7 @@ algorithm that never rolls back steps with true, which lets an FMU drop its hist
 """
 from __future__ import annotations
 
-from .fmi_calls import FmiCallError
+from sewfmu.scenarios.cosim.fmi_calls import FmiCallError
 
 
 class Rollback:

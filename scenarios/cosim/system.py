@@ -10,10 +10,10 @@ from __future__ import annotations
 import warnings
 from typing import Callable
 
-from .divergence import bound_text, declared_bound
-from .fmi_calls import LogCollector, kind_of
-from .format import Scenario
-from .values import ScenarioError, did_you_mean
+from sewfmu.scenarios.cosim.divergence import bound_text, declared_bound
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector, kind_of
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError, did_you_mean
 
 
 class InputLeftOpen(UserWarning):
@@ -114,7 +114,7 @@ def check_parameters(scenario: Scenario, descriptions: dict) -> None:
 
 def _unit_hint(unit: str | None, value: float) -> str:
     """How a value out of range may have been meant: with the unit users think in."""
-    from ..components.units import DISPLAY_UNITS
+    from sewfmu.components.units import DISPLAY_UNITS
 
     displays = list(DISPLAY_UNITS.get(unit or "", {}))
     return (f" (meant in {displays[0]}? give the unit: \"{value:g} {displays[0]}\")"

@@ -30,12 +30,14 @@ from xml.etree import ElementTree
 import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
-from .._version import __version__
-from . import fmu_documentation
-from .carried_reference import carry, default_experiment_output
-from .registry import FMI_VERSIONS, FMUS
+import sewfmu.components
+from sewfmu._version import __version__
+from sewfmu.components.registry import FMI_VERSIONS, FMUS
+from sewfmu.scenarios.fmu_build import documentation as fmu_documentation
+from sewfmu.scenarios.fmu_build.carried_reference import carry, default_experiment_output
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+# the model code every FMU carries: all of components/, nothing else
+MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent
 VERSION = __version__     # sewfmu's one version (sewfmu/_version.py)
 
 
@@ -112,15 +114,16 @@ def default_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
         base = Path(base)
     elif os.environ.get("SEWFMU_FMU_DIR"):
         base = Path(os.environ["SEWFMU_FMU_DIR"])
-    elif (PACKAGE_DIR.parent / "pyproject.toml").exists():
-        base = PACKAGE_DIR.parent / "fmus"
+    elif (MODEL_CODE_DIR.parent / "pyproject.toml").exists():
+        base = MODEL_CODE_DIR.parent / "fmus"
     else:
         base = Path.cwd() / "fmus"
     return base / "fmi3" if fmi == 3 else base
 
 
-def code_hash(source: Path = PACKAGE_DIR) -> str:
-    """Hash of the model code that goes into every FMU."""
+def model_code_hash(source: Path = MODEL_CODE_DIR) -> str:
+    """Hash of the model code every FMU carries: the name and bytes of each .py file in
+    components/ (the FMI 2.0 and 3.0 layers both; nothing outside that folder)."""
     digest = hashlib.sha256()
     for path in sorted(Path(source).glob("*.py")):
         digest.update(path.name.encode())
@@ -139,7 +142,7 @@ def fmu_version(fmu_path: Path) -> str | None:
 
 
 def current_version() -> str:
-    return f"{VERSION}+{code_hash()}"
+    return f"{VERSION}+{model_code_hash()}"
 
 
 def _builder(fmi: int):
@@ -150,7 +153,7 @@ def _builder(fmi: int):
     return FmuBuilder
 
 
-def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
+def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR,
               fmi: int = 2) -> Path:
     """Build one FMU for FMI `fmi` (2 or 3) into dest (default fmus/, fmus/fmi3/ for FMI 3.0)
     from the model code in `source` (this package, or a modified copy of it); return its path."""
@@ -166,20 +169,20 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = PACKAGE_DIR,
     dest.mkdir(parents=True, exist_ok=True)
     module, slave = FMUS[name]
     source = Path(source)
-    tag = code_hash(source)
+    tag = model_code_hash(source)
     # the two versions' FMUs may run in one process: their modules must not share names
     prefix = "sewfmu3" if fmi == 3 else "sewfmu"
     package = f"{prefix}_{tag}"
     other_layer = "fmi2_layer" if fmi == 3 else "fmi3_layer"
     script_module = f"{prefix}_{name}_{tag}"
-    slave_doc = getattr(importlib.import_module(f"{__package__}.{module}"), slave).__doc__.strip()
+    slave_doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__.strip()
     with tempfile.TemporaryDirectory(prefix="sewfmu_build_") as tmp:
         tmp = Path(tmp)
         pkg_dir = tmp / package
         pkg_dir.mkdir()
+        # all of components/ but the other FMI version's layer
         modules = sorted(p.stem for p in source.glob("*.py")
-                         if p.stem not in ("__init__", "build", "carried_reference",
-                                           "fmu_documentation", other_layer))
+                         if p.stem not in ("__init__", other_layer))
         for mod in modules:
             shutil.copy2(source / f"{mod}.py", pkg_dir / f"{mod}.py")
         # Import every module with the package: a host that loads this FMU again from another

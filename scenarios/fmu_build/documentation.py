@@ -6,7 +6,7 @@ from __future__ import annotations
 import html
 import zipfile
 
-from .parameters import parameter_info
+from sewfmu.components.parameters import parameter_info
 
 HOST_NEEDS = (
     "This FMU runs its model in Python (made with pythonfmu{suffix}). Its binary is not linked to "

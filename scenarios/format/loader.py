@@ -8,14 +8,14 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-from .format import Scenario, from_dict
-from .ssp_import import load_ssp
-from .values import ScenarioError, did_you_mean
+from sewfmu.scenarios.format.scenario import Scenario, from_dict
+from sewfmu.scenarios.format.ssp_import import load_ssp
+from sewfmu.scenarios.format.values import ScenarioError, did_you_mean
 
 
 def catalogue() -> dict[str, Path]:
     """The scenarios that ship with sewfmu: name -> path."""
-    folder = resources.files(__package__) / "catalogue"
+    folder = resources.files("sewfmu.scenarios") / "catalogue"
     return {Path(str(p)).stem: Path(str(p)) for p in folder.iterdir() if str(p).endswith(".toml")}
 
 

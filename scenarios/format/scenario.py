@@ -42,10 +42,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..components.registry import FMI_VERSIONS, FMUS, parameter_units
-from .algorithm_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
-from .experiment import EXPERIMENT_KEYS
-from .values import ScenarioError, check_instance_name, did_you_mean, label_of, positive, seconds, short
+from sewfmu.components.registry import FMI_VERSIONS, FMUS, parameter_units
+from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
+from sewfmu.scenarios.format.values import (
+    ScenarioError,
+    check_instance_name,
+    did_you_mean,
+    label_of,
+    positive,
+    seconds,
+    short,
+)
 
 # the masters and their settings (defaults, the tolerances each honours): one class per master in
 # scenarios/algorithm_settings.py
@@ -122,8 +130,8 @@ class Scenario:
         experiment.revolutions with its parameters (its speed ramp included)."""
         if self.stop_time is not None:
             return self.stop_time
-        from ..components.parameters import ParameterError, with_values
-        from ..components.shaft import MainShaft, ShaftParams
+        from sewfmu.components.parameters import ParameterError, with_values
+        from sewfmu.components.shaft import MainShaft, ShaftParams
 
         if self.shaft is None:        # revolutions set later (--set)
             self.shaft = self.default_shaft()
@@ -151,8 +159,8 @@ class Scenario:
         """The time the last whole revolution of the counted shaft begins (None where the
         scenario has no MainShaft to count): from there on every step is recorded, whatever
         experiment.record_every thins out before, so that the key figures never depend on it."""
-        from ..components.parameters import ParameterError, with_values
-        from ..components.shaft import MainShaft, ShaftParams
+        from sewfmu.components.parameters import ParameterError, with_values
+        from sewfmu.components.shaft import MainShaft, ShaftParams
 
         shaft = self.shaft or self.default_shaft()
         if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
@@ -205,7 +213,7 @@ class Scenario:
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
-        from ..components.units import UnitError, in_unit
+        from sewfmu.components.units import UnitError, in_unit
 
         fmu = self.instances[inst].fmu
         units = (_declared_units(self.fmu_files[fmu]) if fmu in self.fmu_files
@@ -424,7 +432,7 @@ def _check_compare(scenario: Scenario, source: str) -> None:
 
 def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict[str, str]:
     """The analysis's roles bound to instances (see scenarios/analyses), or {} without one."""
-    from .analyses import RoleError, bind
+    from sewfmu.scenarios.analyses import RoleError, bind
 
     analysis, given = data.get("analysis"), data.get("roles", {})
     if analysis is None:

@@ -25,11 +25,11 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from .algorithm_settings import ACCELERATIONS, MASTER_NAMES
-from .experiment import EXPERIMENT_KEYS
-from .format import Connection, Instance, Scenario, check_one_source
-from .outputs import alive
-from .values import ScenarioError, check_instance_name
+from sewfmu.scenarios.files.outputs import alive
+from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES
+from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario, check_one_source
+from sewfmu.scenarios.format.values import ScenarioError, check_instance_name
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -312,7 +312,7 @@ def _experiment(root: ET.Element) -> dict:
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
     """The analysis whose roles the components' FMU types fill, if one does."""
-    from .analyses import RoleError, bind, mechanisms
+    from sewfmu.scenarios.analyses import RoleError, bind, mechanisms
 
     for analysis in mechanisms():
         try:

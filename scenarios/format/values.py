@@ -63,7 +63,7 @@ def positive(value: Any, where: str) -> float:
 def seconds(value: Any, where: str) -> float:
     """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
     if isinstance(value, str):
-        from ..components.units import UnitError, in_unit
+        from sewfmu.components.units import UnitError, in_unit
         try:
             value = in_unit(value, "s")
         except UnitError as err:

@@ -22,9 +22,9 @@ import uuid
 import zipfile
 from pathlib import Path
 
-from .fmi_calls import kind_of
-from .format import Scenario
-from .values import ScenarioError
+from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError
 
 FIXED_STEP_MASTERS = ("jacobi", "gauss-seidel")
 # FMI 3.0's words for FMI 2.0's types (the container's library uses them whatever its version)

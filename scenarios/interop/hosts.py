@@ -5,7 +5,7 @@ os._exit: those hosts free and unload the FMU libraries as they shut down, which
 binary does not survive inside a Python process (see README). The parent reads the CSV back as a
 RunResult, so `sewfmu crosscheck` summarizes it exactly like sewfmu's own run.
 
-    python -m sewfmu.scenarios.hosts libcosim|ecos SSP STEP STOP RECORD_JSON OUT_CSV
+    python -m sewfmu.scenarios.interop.hosts libcosim|ecos SSP STEP STOP RECORD_JSON OUT_CSV
 """
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ def _load_tbb() -> None:
 
 
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
-    from .ssp import PARAMETER_SET
+    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET
 
     _load_tbb()
     from ecospy import EcosSimulation
@@ -175,7 +175,7 @@ def check_host_environment(env: dict[str, str]) -> list[str]:
 
 def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout: float = 600.0):
     """Run the .ssp with the `ecos` command-line tool; return (time, columns, wall)."""
-    from .ssp import PARAMETER_SET
+    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET
 
     env = {**os.environ, **host_environment()}
     problems = check_host_environment(env)
@@ -245,7 +245,7 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
     error_file = Path(str(out_csv) + ".error")
     error_file.unlink(missing_ok=True)
     started = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "sewfmu.scenarios.hosts", host, str(ssp),
+    proc = subprocess.run([sys.executable, "-m", "sewfmu.scenarios.interop.hosts", host, str(ssp),
                            repr(scenario.even_steps()[1]), repr(scenario.end_time()),
                            json.dumps(record),
                            str(out_csv)], capture_output=True, text=True, timeout=timeout)

@@ -16,10 +16,10 @@ from xml.etree import ElementTree as ET
 
 from fmpy import read_model_description
 
-from ..components.units import UNITS
-from .experiment import ssp_settings
-from .fmi_calls import kind_of
-from .format import Scenario
+from sewfmu.components.units import UNITS
+from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.format.experiment import ssp_settings
+from sewfmu.scenarios.format.scenario import Scenario
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

@@ -25,7 +25,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from .values import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 
 LS_REF = "extra/org.fmi-standard.fmi-ls-ref"
 MANIFEST = f"{LS_REF}/fmi-ls-manifest.xml"
@@ -178,8 +178,8 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
     from fmpy import simulate_fmu
 
-    from .fmi_calls import LogCollector, Status
-    from .instances import open_instance
+    from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status
+    from sewfmu.scenarios.cosim.instances import open_instance
 
     log = LogCollector()
     instance = open_instance("reference", Path(fmu), log)

@@ -17,8 +17,8 @@ import pytest
 @pytest.fixture
 def fmu_reference():
     def check(fmu, refs=None, rtol: float | None = None, atol: float | None = None) -> None:
-        from sewfmu.scenarios import reference_check
-        from sewfmu.scenarios.values import ScenarioError
+        from sewfmu.scenarios.format.values import ScenarioError
+        from sewfmu.scenarios.references import reference_check
 
         try:
             outcomes = reference_check.check(fmu, refs, rtol, atol)

@@ -13,9 +13,9 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import fmu_reference, regression
-from .fmu_reference import Deviation, Reference
-from .values import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.references import fmu_reference, regression
+from sewfmu.scenarios.references.fmu_reference import Deviation, Reference
 
 
 @dataclass

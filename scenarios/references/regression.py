@@ -1,5 +1,5 @@
 """Regression references for every FMU, in the layout of the FMI Cross-Check repository, shipped
-with the package (scenarios/regression_references/):
+with the package (scenarios/references/regression_references/):
 
     <Model>/<Model>_ref.csv   the outputs (time and one column per output)
     <Model>/<Model>_in.csv    the inputs, where the FMU has any
@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import fmu_reference
-from .analyses import RegressionCase, mechanisms
-from .fmu_reference import Experiment
+from sewfmu.scenarios.analyses import RegressionCase, mechanisms
+from sewfmu.scenarios.references import fmu_reference
+from sewfmu.scenarios.references.fmu_reference import Experiment
 
 REFERENCE_DIR = Path(__file__).resolve().parent / "regression_references"
 

@@ -12,8 +12,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import analyses
-from .outputs import write_atomic
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.files.outputs import write_atomic
 
 STYLE = """
 body { font: 15px/1.45 system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0; color: #222;
@@ -207,7 +207,7 @@ def study_report(path: Path, name: str, study, headline: dict, picture: Path) ->
     shown = Section("Pictures")
     shown.pictures([(study.description, picture)])
     what = Section("What was run")
-    from ..components.build import VERSION
+    from sewfmu.scenarios.fmu_build.build import VERSION
     what.table(["", ""], [["study", name], ["sewfmu", VERSION]])
     write(path, f"sewfmu: {name}", study.description, [figures, shown, what])
 

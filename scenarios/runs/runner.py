@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..components.build import default_fmu_dir, ensure_built
-from . import analyses
-from .experiment import experiment_of
-from .format import Scenario
-from .master import RunResult, run
-from .outputs import folder_for, replacing, write_atomic
-from .values import ScenarioError, label_of
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.cosim.master import RunResult, run
+from sewfmu.scenarios.files.outputs import folder_for, replacing, write_atomic
+from sewfmu.scenarios.fmu_build.build import default_fmu_dir, ensure_built
+from sewfmu.scenarios.format.experiment import experiment_of
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError, label_of
 
 
 def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:
@@ -32,7 +32,7 @@ def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False
         if plot or report:
             study.plot(data, staging / f"{name}.png")
         if report:
-            from .report import study_report
+            from sewfmu.scenarios.runs.report import study_report
             study_report(staging / "report.html", name, study, headline, staging / f"{name}.png")
     return headline
 
@@ -45,7 +45,7 @@ def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
 
 
 def fmus_for(scenario: Scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
-    from ..components.registry import FMUS
+    from sewfmu.components.registry import FMUS
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
     if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
@@ -107,8 +107,8 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
     """What produced a run: the scenario (file and its hash), every parameter value each instance
     ran with (defaults included; `set` marks the scenario's own values), the master and step,
     sewfmu's version and each FMU's version with the hash of the code it carries."""
-    from ..components.build import VERSION
-    from .instances import extracted_fmu
+    from sewfmu.scenarios.cosim.instances import extracted_fmu
+    from sewfmu.scenarios.fmu_build.build import VERSION
 
     described = {fmu: extracted_fmu(Path(path))[1] for fmu, path in fmu_paths.items()}
     instances = {}
@@ -174,7 +174,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
     what the previous run wrote (outputs.replacing): a failed or interrupted run leaves the
     previous results as they were. `report` is a self-contained page with the plots, the
     animations and, for the punch drive, the comparison with the monolithic solution."""
-    from . import animations
+    from sewfmu.scenarios import animations
 
     summary = summary_of_runs(scenario, runs)
     against_monolithic = {}
@@ -200,7 +200,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
             analyses.module(scenario.analysis).plot(curves, png, scenario.description)
             pictures.insert(0, ("key curves of the last revolution", png))
         if report:
-            from .report import run_report
+            from sewfmu.scenarios.runs.report import run_report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
 
 
@@ -220,7 +220,7 @@ def monolithic_summary(scenario: Scenario, rtol: float | None = None) -> tuple[d
     if not (scenario.analysis and analyses.mechanism(scenario.analysis).monolithic):
         raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
-    from . import punch_monolithic
+    from sewfmu.scenarios.analyses.solutions import punch_monolithic
 
     params = {role: dict(scenario.instances[name].parameters)
               for role, name in scenario.roles.items()}
@@ -263,7 +263,7 @@ def compare(scenario: Scenario, fmu_dir: Path | None = None,
 
 def export(scenario: Scenario, path: Path, fmu_dir: Path | None = None) -> Path:
     """The scenario as an SSP 1.0 archive for other co-simulation tools."""
-    from .ssp import export_ssp
+    from sewfmu.scenarios.interop.ssp_export import export_ssp
 
     return export_ssp(scenario, Path(path), fmus_for(scenario, fmu_dir))
 
@@ -284,7 +284,7 @@ def _end_at(time: np.ndarray, columns: dict, stop: float):
 def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | None = None):
     """Run the exported scenario in another host; write its results.csv and summary.json;
     return rows (figure, sewfmu, host, difference) and the two summaries."""
-    from .hosts import run_in_host
+    from sewfmu.scenarios.interop.hosts import run_in_host
 
     with replacing(out_dir) as staging:
         ssp = export(scenario, staging / f"{scenario.name}.ssp", fmu_dir)

@@ -25,10 +25,10 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .experiment import experiment_of
-from .format import Scenario
-from .outputs import folder_for, remove_debris, write_atomic
-from .values import ScenarioError, label_of, parse_value
+from sewfmu.scenarios.files.outputs import folder_for, remove_debris, write_atomic
+from sewfmu.scenarios.format.experiment import experiment_of
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
 
 POINTS_FILE = "points.jsonl"
 TABLE_FILE = "sweep.csv"
@@ -52,7 +52,7 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from ..components.build import fmu_version
+    from sewfmu.scenarios.fmu_build.build import fmu_version
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
@@ -109,12 +109,12 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
 
 # what the worker processes' fork server imports once, so that no worker imports it again
 # (multiprocessing ignores a name it cannot import: tests/test_sweep.py imports them)
-WORKER_PRELOAD = ["sewfmu.scenarios.runner", "sewfmu.scenarios.master"]
+WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master"]
 
 
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
-    from .runner import simulate, summarize, write_csv
+    from sewfmu.scenarios.runs.runner import simulate, summarize, write_csv
 
     row = {"index": point.index, "key": key, **dict(point.values)}
     try:
@@ -201,9 +201,9 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
               scheduler: str | None = None, keep_results: bool = False,
               progress: bool = True) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order."""
-    from .instances import extracted_fmu
-    from .runner import fmus_for
-    from .system import check_parameters
+    from sewfmu.scenarios.cosim.instances import extracted_fmu
+    from sewfmu.scenarios.cosim.system import check_parameters
+    from sewfmu.scenarios.runs.runner import fmus_for
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):
@@ -259,7 +259,7 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
             for future in as_completed(futures):
                 yield from future.result()
         return
-    from .workers import run_tasks
+    from sewfmu.scenarios.runs.workers import run_tasks
 
     by_key = {keys[p.index]: p for p in todo}
     tasks = [(keys[p.index], run_point, (scenario, p, keys[p.index], results_dir)) for p in todo]
@@ -346,13 +346,13 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
                    report: bool = False) -> None:
     """The plot of every key figure against the swept parameters (SCENARIO_sweep.png) and, with
     report, report.html beside sweep.csv."""
-    from . import analyses
+    from sewfmu.scenarios import analyses
 
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
         figures = [f for f in analyses.mechanism(scenario.analysis).figures if f != "n_contacts"]
         plot_table(rows, swept, figures, picture, scenario.description)
     if report:
-        from .report import sweep_report
+        from sewfmu.scenarios.runs.report import sweep_report
         sweep_report(out_dir / "report.html", scenario, rows, swept,
                      picture if scenario.analysis else None)

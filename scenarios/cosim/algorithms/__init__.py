@@ -4,9 +4,9 @@ scenarios/master.py; their settings are scenarios/algorithm_settings.py's.
 """
 from __future__ import annotations
 
-from .adaptive import Adaptive
-from .coupling import Iterative
-from .fixed_step import GaussSeidel, Jacobi
+from sewfmu.scenarios.cosim.algorithms.adaptive import Adaptive
+from sewfmu.scenarios.cosim.algorithms.fixed_step import GaussSeidel, Jacobi
+from sewfmu.scenarios.cosim.algorithms.iterative import Iterative
 
 ALGORITHMS = {cls.name: cls for cls in (Jacobi, GaussSeidel, Iterative, Adaptive)}
 

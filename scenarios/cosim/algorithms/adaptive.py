@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
-from .algorithm_settings import AdaptiveSettings
-from .coupling import rate_chains
-from .fixed_step import Jacobi
-from .fmi_calls import FmiCallError
-from .rollback import Rollback
+from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
+from sewfmu.scenarios.cosim.algorithms.iterative import rate_chains
+from sewfmu.scenarios.cosim.fmi_calls import FmiCallError
+from sewfmu.scenarios.cosim.rollback import Rollback
+from sewfmu.scenarios.format.master_settings import AdaptiveSettings
 
 GROWTH = 4.0
 SHRINK = 0.25

@@ -14,9 +14,9 @@ exchanges and steps; the run loop is scenarios/master.py's.
 """
 from __future__ import annotations
 
-from .algorithm import Algorithm
-from .algorithm_settings import GaussSeidelSettings, JacobiSettings
-from .format import ScenarioError
+from sewfmu.scenarios.cosim.algorithms.base import Algorithm
+from sewfmu.scenarios.format.master_settings import GaussSeidelSettings, JacobiSettings
+from sewfmu.scenarios.format.scenario import ScenarioError
 
 
 class Jacobi(Algorithm):

@@ -24,10 +24,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .algorithm_settings import IterativeSettings
-from .fixed_step import Jacobi
-from .rollback import Rollback
-from .system import reaches
+from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
+from sewfmu.scenarios.cosim.rollback import Rollback
+from sewfmu.scenarios.cosim.system import reaches
+from sewfmu.scenarios.format.master_settings import IterativeSettings
 
 MAX_ITERATIONS = 25
 INITIAL_RELAXATION = 0.5

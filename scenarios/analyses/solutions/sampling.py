@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..components.kinematics import AssemblyError
+from sewfmu.components.kinematics import AssemblyError
 
 
 def sampled(evaluate: Callable[..., Any], *args) -> Any:

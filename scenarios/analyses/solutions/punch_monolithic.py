@@ -16,11 +16,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ..components.parameters import with_values
-from ..components.punch_contact import GRAVITY, PunchContactParams
-from ..components.punch_linkage import PunchLinkage, PunchLinkageParams
-from ..components.shaft import MainShaft, ShaftParams
-from .sampling import sampled
+from sewfmu.components.parameters import with_values
+from sewfmu.components.punch_contact import GRAVITY, PunchContactParams
+from sewfmu.components.punch_linkage import PunchLinkage, PunchLinkageParams
+from sewfmu.components.shaft import MainShaft, ShaftParams
+from sewfmu.scenarios.analyses.solutions.sampling import sampled
 
 
 @dataclass
