@@ -15,7 +15,8 @@ import math
 import numpy as np
 
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import monolithic_summary, simulate, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import simulate, summarize
 
 FIGURES = ("contact_onset_deg", "contact_loss_deg", "F2_peak", "F2_weld_mean")
 RUNS = [("punch_drive", "jacobi", h) for h in (1e-3, 5e-4, 2.5e-4, 1e-4)] + \

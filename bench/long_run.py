@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 from sewfmu.scenarios.cosim.master import Master
+from sewfmu.scenarios.fmu_build.build import fmus_for
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import fmus_for
 
 
 def rss_mib() -> float:

@@ -26,7 +26,8 @@ from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.fmu_build.build import ensure_built
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
-from sewfmu.scenarios.runs.runner import monolithic_summary, simulate, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import simulate, summarize
 
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """

@@ -12,7 +12,8 @@ import numpy as np
 
 from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import monolithic_summary, simulate, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import simulate, summarize
 
 STEPS = (1e-3, 5e-4, 2.5e-4, 1e-4, 5e-5)
 

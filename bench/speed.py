@@ -29,9 +29,10 @@ from pathlib import Path
 
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim.master import Master, run
-from sewfmu.scenarios.fmu_build.build import ensure_built
+from sewfmu.scenarios.fmu_build.build import ensure_built, fmus_for
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import fmus_for, monolithic_summary, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import grid_points, run_sweep
 
 ONSET_WITHIN, FORCE_WITHIN = 0.002, 0.002          # ° and N from the tight solution

@@ -104,7 +104,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs")."""
-    from sewfmu.scenarios.runs.runner import run_variants, summary_of_runs, write_outputs
+    from sewfmu.scenarios.runs.results import write_outputs
+    from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
 
     sc = load(scenario, set)
     if (plot or animate or report) and out is None:
@@ -218,7 +219,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
     scenarios): {figure: {"cosim", "monolithic", "difference", "unit"}}; with `rtol` also the
     monolithic solver at that tolerance ("monolithic_rtol", "rtol_error")."""
-    from sewfmu.scenarios.runs.runner import compare as compare_rows
+    from sewfmu.scenarios.runs.compare import compare as compare_rows
 
     sc = load(scenario, set)
     units = {**figure_units(sc.analysis), "wall_time_s": "s"}

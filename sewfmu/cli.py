@@ -52,7 +52,7 @@ def cmd_list(args) -> None:
 
 def cmd_run(args) -> None:
     from sewfmu.scenarios.analyses import studies
-    from sewfmu.scenarios.runs.runner import run_scenario, run_study
+    from sewfmu.scenarios.runs.results import run_scenario, run_study
 
     if args.scenario in studies():
         if args.set:
@@ -90,7 +90,7 @@ def cmd_run(args) -> None:
 
 
 def cmd_compare(args) -> None:
-    from sewfmu.scenarios.runs.runner import compare
+    from sewfmu.scenarios.runs.compare import compare
 
     scenario = _load_with_sets(args.scenario, args.set)
     rows = compare(scenario, rtol=args.rtol)
@@ -135,15 +135,15 @@ def cmd_show(args) -> None:
 
 
 def cmd_export_ssp(args) -> None:
-    from sewfmu.scenarios.runs.runner import export
+    from sewfmu.scenarios.interop.ssp_export import export
 
     scenario = _load_with_sets(args.scenario, args.set)
     print(export(scenario, Path(args.output)))
 
 
 def cmd_export_fmu(args) -> None:
+    from sewfmu.scenarios.fmu_build.build import fmus_for
     from sewfmu.scenarios.interop.export_fmu import export_fmu
-    from sewfmu.scenarios.runs.runner import fmus_for
 
     scenario = _load_with_sets(args.scenario, args.set)
     scenario.fmi = args.fmi            # the components of the FMI version of the container
@@ -154,8 +154,8 @@ def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
     from sewfmu.components.registry import FMUS
+    from sewfmu.scenarios.fmu_build.build import fmus_for_names
     from sewfmu.scenarios.references import regression as references
-    from sewfmu.scenarios.runs.runner import fmus_for_names
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)
     folder = Path(args.refs) if args.refs else references.REFERENCE_DIR
@@ -229,7 +229,7 @@ def cmd_host_env(args) -> None:
 
 
 def cmd_crosscheck(args) -> None:
-    from sewfmu.scenarios.runs.runner import crosscheck
+    from sewfmu.scenarios.interop.cross_check import crosscheck
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_{args.host}"

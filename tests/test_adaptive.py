@@ -6,7 +6,8 @@ import pytest
 from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
 from sewfmu.scenarios.cosim.master import Master, run
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import monolithic_summary, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import summarize
 
 
 def _adaptive(fmu_paths, name="punch_drive", tolerance=None):

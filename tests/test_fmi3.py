@@ -15,8 +15,10 @@ from fmpy.fmi1 import FMICallException
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.interop.ssp_export import export
 from sewfmu.scenarios.references import regression as references
-from sewfmu.scenarios.runs.runner import export, simulate, variants
+from sewfmu.scenarios.runs.runner import simulate
+from sewfmu.scenarios.runs.variants import variants
 from tests.fmu_host import Host
 
 REPO = Path(__file__).resolve().parent.parent

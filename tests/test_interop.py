@@ -14,9 +14,10 @@ from sewfmu.cli import main
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.interop.cross_check import crosscheck
 from sewfmu.scenarios.interop.hosts import check_host_environment, host_environment
+from sewfmu.scenarios.interop.ssp_export import export
 from sewfmu.scenarios.references import regression as references
-from sewfmu.scenarios.runs.runner import crosscheck, export
 
 pytestmark = [pytest.mark.slow, pytest.mark.interop]
 

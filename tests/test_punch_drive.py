@@ -14,7 +14,9 @@ from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.fmu_build.build import current_version
 from sewfmu.scenarios.format.loader import load, resolve
-from sewfmu.scenarios.runs.runner import monolithic_summary, run_scenario, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.results import run_scenario
+from sewfmu.scenarios.runs.runner import summarize
 
 
 @pytest.fixture(scope="module")

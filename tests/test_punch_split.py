@@ -12,7 +12,8 @@ from sewfmu.scenarios.cosim.algorithms import iterative as coupling
 from sewfmu.scenarios.cosim.divergence import Diverged
 from sewfmu.scenarios.cosim.master import Master, run
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.runs.runner import monolithic_summary, summarize
+from sewfmu.scenarios.runs.compare import monolithic_summary
+from sewfmu.scenarios.runs.runner import summarize
 
 
 def _split(fmu_paths, master=None, step=None, **settings):

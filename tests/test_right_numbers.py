@@ -19,7 +19,8 @@ from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.scenario import ScenarioError
-from sewfmu.scenarios.runs.runner import run_scenario, summarize
+from sewfmu.scenarios.runs.results import run_scenario
+from sewfmu.scenarios.runs.runner import summarize
 from tests.fmu_host import Host
 
 

@@ -6,7 +6,7 @@ import pytest
 from sewfmu.cli import main
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.scenario import ScenarioError
-from sewfmu.scenarios.runs.runner import run_scenario
+from sewfmu.scenarios.runs.results import run_scenario
 from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 
 RENAMED = {"shaft": "вал", "linkage": "рычаг", "punch": "ram"}

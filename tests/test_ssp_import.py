@@ -12,7 +12,8 @@ import pytest
 
 from sewfmu.cli import main
 from sewfmu.scenarios.format.loader import catalogue, load
-from sewfmu.scenarios.runs.runner import export, simulate, summarize
+from sewfmu.scenarios.interop.ssp_export import export
+from sewfmu.scenarios.runs.runner import simulate, summarize
 
 SKIP = ("scenario", "master", "step", "stop_time", "wall_time_s")
 

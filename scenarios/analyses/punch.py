@@ -126,6 +126,30 @@ def summary_of_monolithic(solution) -> dict:
     return summary(solution.phi, solution.y, solution.F2, solution.contact)
 
 
+def monolithic_figures(scenario, rtol: float | None = None,
+                       punch_roles: tuple[str, ...] = ("punch",)) -> tuple[dict, float]:
+    """Key figures of the punch drive solved as one ODE (DOP853, tight tolerances, or `rtol`
+    with atol = rtol/1000) and the solver's wall time. `punch_roles`: the instances whose
+    parameters together make the punch (the split drive's body and fabric)."""
+    import time
+
+    from sewfmu.components.shaft import ShaftParams
+    from sewfmu.scenarios.analyses.solutions import punch_monolithic  # scipy: only when asked
+
+    params = {role: dict(scenario.instances[name].parameters)
+              for role, name in scenario.roles.items()}
+    params["punch"] = {k: v for role in punch_roles for k, v in params.pop(role).items()}
+    t_end = scenario.end_time()
+    omega = params["shaft"].get("omega0", ShaftParams().omega0)
+    started = time.perf_counter()
+    tolerances = {} if rtol is None else {"rtol": rtol, "atol": rtol * 1e-3}
+    solution = punch_monolithic.solve(params["shaft"], params["linkage"], params["punch"], t_end,
+                                      sample_step=math.radians(0.01) / omega,
+                                      sample_from=max(0.0, t_end - 2.2 * math.pi / omega),
+                                      **tolerances)
+    return summary_of_monolithic(solution), time.perf_counter() - started
+
+
 # --- plots ------------------------------------------------------------------------------------
 def plot(curves, path, title: str) -> None:
     """y(φ) and F2(φ) over the last revolution; `curves` is a list of (label, run result)."""

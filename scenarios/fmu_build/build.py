@@ -35,6 +35,7 @@ from sewfmu._version import __version__
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.fmu_build import documentation as fmu_documentation
 from sewfmu.scenarios.fmu_build.carried_reference import carry, default_experiment_output
+from sewfmu.scenarios.format.values import ScenarioError
 
 # the model code every FMU carries: all of components/, nothing else
 MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent
@@ -275,3 +276,23 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2) -> dict[str, Pat
             build_fmu(name, dest, fmi=fmi)
         paths[name] = path
     return paths
+
+
+def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
+                   fmi: int = 2) -> dict[str, Path]:
+    """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
+    (default: fmus/; FMI 3.0: its folder fmi3/)."""
+    return ensure_built(sorted(names), default_fmu_dir(fmi, fmu_dir), fmi=fmi)
+
+
+def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
+    """The FMU file of each FMU type a scenario uses: an SSP system's own, or sewfmu's built
+    where missing or stale."""
+    names = sorted({inst.fmu for inst in scenario.instances.values()})
+    if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
+        return {name: scenario.fmu_files[name] for name in names}
+    unknown = [n for n in names if n not in FMUS]
+    if unknown:
+        raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
+                            f"(known: {', '.join(FMUS)})")
+    return fmus_for_names(names, fmu_dir, scenario.fmi)

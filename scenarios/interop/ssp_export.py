@@ -18,6 +18,7 @@ from fmpy import read_model_description
 
 from sewfmu.components.units import UNITS
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.fmu_build.build import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
 from sewfmu.scenarios.format.scenario import Scenario
 
@@ -125,3 +126,8 @@ def export_ssp(scenario: Scenario, path: Path, fmu_paths: dict[str, Path]) -> Pa
     Path(ssd).unlink()
     staged.replace(path)
     return path
+
+
+def export(scenario: Scenario, path: Path, fmu_dir: Path | None = None) -> Path:
+    """The scenario as an SSP 1.0 archive for other co-simulation tools."""
+    return export_ssp(scenario, Path(path), fmus_for(scenario, fmu_dir))

@@ -114,7 +114,8 @@ WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master
 
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
-    from sewfmu.scenarios.runs.runner import simulate, summarize, write_csv
+    from sewfmu.scenarios.runs.results import write_csv
+    from sewfmu.scenarios.runs.runner import simulate, summarize
 
     row = {"index": point.index, "key": key, **dict(point.values)}
     try:
@@ -203,7 +204,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
     """Run every point not yet done in out_dir; return all rows, in point order."""
     from sewfmu.scenarios.cosim.instances import extracted_fmu
     from sewfmu.scenarios.cosim.system import check_parameters
-    from sewfmu.scenarios.runs.runner import fmus_for
+    from sewfmu.scenarios.fmu_build.build import fmus_for
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):

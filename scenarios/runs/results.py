@@ -1,0 +1,96 @@
+"""A run's files (and a study's): results.csv (a column per recorded output, its unit in the header),
+summary.json, and as asked the plots, animations and report.html, written into the output folder
+in one piece (files.outputs.replacing); run_scenario and run_study run and write."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from sewfmu.scenarios import analyses
+from sewfmu.scenarios.cosim.master import RunResult
+from sewfmu.scenarios.files.outputs import folder_for, replacing, write_atomic
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.runs.compare import comparison_rows, monolithic_summary
+from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
+
+
+def write_csv(result: RunResult, path: Path) -> None:
+    names = list(result.columns)
+    table = np.column_stack([result.time] + [result.columns[n] for n in names])
+    # each column says its unit, as "name [unit]" (a Boolean, which has none, its name alone)
+    header = ",".join(["time [s]"] + [f"{n} [{result.units[n]}]" if result.units.get(n) else n
+                                      for n in names])
+    write_atomic(path, lambda f: np.savetxt(f, table, delimiter=",", header=header, comments="",
+                                             fmt="%.17g"))
+
+
+def write_json(data, path: Path) -> None:
+    write_atomic(path, lambda f: (json.dump(data, f, indent=2), f.write("\n")))
+
+
+def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], out_dir: Path,
+                  plot: bool = False, animate: bool = False, report: bool = False) -> None:
+    """Write the runs into out_dir: results.csv and summary.json (a folder per variant), and
+    as asked PNG plots, GIF animations, report.html.
+
+    Every run is done before out_dir is touched, and what is written then takes the place of
+    what the previous run wrote (outputs.replacing): a failed or interrupted run leaves the
+    previous results as they were. `report` is a self-contained page with the plots, the
+    animations and, for the punch drive, the comparison with the monolithic solution."""
+    from sewfmu.scenarios import animations  # matplotlib and pillow: only when animating
+
+    summary = summary_of_runs(scenario, runs)
+    against_monolithic = {}
+    if report and scenario.analysis and analyses.mechanism(scenario.analysis).monolithic:
+        for label, result, own in runs:
+            against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0],
+                                                       scenario.analysis)
+    with replacing(out_dir) as staging:
+        pictures = []
+        for label, result, own in runs:
+            where = folder_for(staging, label) if label else staging
+            write_csv(result, where / "results.csv")
+            write_json(own, where / "summary.json")
+            if (animate or report) and animations.can_animate(scenario):
+                gif = where / f"{scenario.name}.gif"
+                animations.animate(result, gif)
+                pictures.append((f"the mechanism moving{', ' + label if label else ''} "
+                                 f"(last revolution, recorded run)", gif))
+        if scenario.compare:
+            write_json(summary, staging / "summary.json")
+        if (plot or report) and scenario.analysis:
+            curves = [(label or scenario.name, result) for label, result, _ in runs]
+            png = staging / f"{scenario.name}.png"
+            analyses.module(scenario.analysis).plot(curves, png, scenario.description)
+            pictures.insert(0, ("key curves of the last revolution", png))
+        if report:
+            from sewfmu.scenarios.runs.report import run_report  # only with --report
+            run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
+
+
+def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
+                 fmu_dir: Path | None = None, progress=None, animate: bool = False,
+                 report: bool = False) -> dict:
+    """Run (each variant of) a scenario into out_dir; return the summary written there."""
+    runs = run_variants(scenario, fmu_dir, progress)
+    write_outputs(scenario, runs, out_dir, plot=plot, animate=animate, report=report)
+    return summary_of_runs(scenario, runs)
+
+
+def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:
+    """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
+    and, with plot, NAME.png; with report, report.html; return the headline figures."""
+    _, study = analyses.studies()[name]
+    data = study.compute()
+    headline = study.headline(data)
+    with replacing(out_dir) as staging:
+        write_json(data, staging / "study.json")
+        write_json(headline, staging / "summary.json")
+        if plot or report:
+            study.plot(data, staging / f"{name}.png")
+        if report:
+            from sewfmu.scenarios.runs.report import study_report  # only with --report
+            study_report(staging / "report.html", name, study, headline, staging / f"{name}.png")
+    return headline
