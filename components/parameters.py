@@ -109,14 +109,19 @@ def validate(params) -> None:
         check_value(info, getattr(params, info.name))
 
 
+def did_you_mean(name: str, known) -> str:
+    """ "; did you mean 'x'?" for the closest known name, or nothing."""
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
 def with_values(params, **values):
     """A copy of `params` with some values replaced, validated."""
     known = {info.name for info in parameter_info(type(params))}
     for name in values:
         if name not in known:
-            close = difflib.get_close_matches(name, sorted(known), n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ParameterError(name, f"unknown parameter of {type(params).__name__}{hint} "
+            raise ParameterError(name, f"unknown parameter of {type(params).__name__}"
+                                       f"{did_you_mean(name, sorted(known))} "
                                        f"(known: {', '.join(sorted(known))})")
     new = replace(params, **values)
     validate(new)

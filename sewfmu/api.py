@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from sewfmu.scenarios.analyses import figure_units
+from sewfmu.scenarios.analyses import figure_units, figures_of
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario, ScenarioError
@@ -79,9 +79,7 @@ class Run:
     @property
     def figures(self) -> dict:
         """The key figures alone (what `sewfmu run` prints)."""
-        return {k: v for k, v in self.summary.items()
-                if k not in ("scenario", "master", "step", "stop_time", "provenance", "units",
-                             "runs", "compare")}
+        return figures_of(self.summary)
 
     @property
     def provenance(self) -> dict:
@@ -100,17 +98,24 @@ class Run:
 
 def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
         out: str | Path | None = None, plot: bool = False, animate: bool = False,
-        report: bool = False, fmu_dir: str | Path | None = None) -> Run:
+        report: bool = False, fmu_dir: str | Path | None = None, progress: bool = False) -> Run:
     """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
-    value (its summary is summary.json's, the figures per run under "runs")."""
+    value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
+    a progress bar on the terminal."""
+    from sewfmu.scenarios.runs.progress import TerminalProgress
     from sewfmu.scenarios.runs.results import write_outputs
     from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
 
     sc = load(scenario, set)
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
-    runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None)
+    bar = TerminalProgress(sc.name) if progress else None
+    try:
+        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, bar)
+    finally:
+        if bar is not None:
+            bar.close()
     if out is not None:
         write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
     out = Path(out) if out is not None else None
@@ -175,10 +180,11 @@ class Sweep:
 def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
-          report: bool = False, progress: bool = False) -> Sweep:
+          report: bool = False, progress: bool = False, results: bool = False) -> Sweep:
     """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
-    writes (and an interrupted sweep into the same folder resumes)."""
+    writes (and an interrupted sweep into the same folder resumes); `results` keeps each point's
+    results.csv there. A sweep whose every point failed is a ScenarioError."""
     from sewfmu.scenarios.runs.sweep import points_of, run_sweep, sweep_pictures
 
     sc = load(scenario, set)
@@ -194,7 +200,10 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     with tempfile.TemporaryDirectory(prefix="sewfmu_sweep_") as scratch:
         folder = Path(out) if out is not None else Path(scratch)
         rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
-                         progress=progress)
+                         keep_results=results and out is not None, progress=progress)
+        if rows and all(r["status"] != "ok" for r in rows):
+            raise ScenarioError(f"every point of the sweep failed ({rows[0]['error']})"
+                                + (f"; see {folder}/sweep.csv" if out is not None else ""))
         if out is not None and (plot or report):
             sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
@@ -240,9 +249,9 @@ def build(fmi: int = 2, dest: str | Path | None = None,
           names: list[str] | None = None) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
     fmus/fmi3/); return their paths."""
+    from sewfmu.components.parameters import did_you_mean
     from sewfmu.components.registry import FMUS
     from sewfmu.scenarios.fmu_build.build import build_fmu, default_fmu_dir
-    from sewfmu.scenarios.format.values import did_you_mean
 
     if isinstance(fmi, bool) or fmi not in (2, 3):
         raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")

@@ -1,4 +1,7 @@
-"""`sewfmu`: the command line, a thin layer over the functions of sewfmu.api."""
+"""`sewfmu`: the command line. Each command parses its options, calls the API's function of
+the same verb where it has one (sewfmu/api.py: run, sweep, compare, build, show, load), and prints
+what it returns; the commands for other tools (export, references, host-env, crosscheck) call
+their wing. Errors become one line (`explain`)."""
 from __future__ import annotations
 
 import argparse
@@ -6,9 +9,10 @@ import os
 import sys
 from pathlib import Path
 
+from sewfmu import api
 from sewfmu._version import __version__
 from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_sigterm
-from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
 
 
@@ -23,10 +27,7 @@ def _load_with_sets(name: str, sets: list[str]):
 
 
 def cmd_build(args) -> None:
-    from sewfmu.scenarios.fmu_build.build import build_all, default_fmu_dir
-
-    dest = default_fmu_dir(args.fmi, Path(args.dest) if args.dest else None)
-    for path in build_all(dest, fmi=args.fmi):
+    for path in api.build(args.fmi, args.dest):
         print(path)
 
 
@@ -34,17 +35,15 @@ def cmd_list(args) -> None:
     import importlib
 
     from sewfmu.components.registry import FMUS
+    from sewfmu.scenarios.analyses import studies
 
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
-        doc = getattr(importlib.import_module(f"..components.{module}", __package__),
-                      slave).__doc__
+        doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
-    from sewfmu.scenarios.analyses import studies
-
     print("scenarios:")
-    for name, path in sorted(catalogue().items()):
-        print(f"  {name:18s} {load(str(path)).description}")
+    for name in api.scenarios():
+        print(f"  {name:18s} {api.load(name).description}")
     print("studies:")
     for name, (_, study) in sorted(studies().items()):
         print(f"  {name:18s} {study.description}")
@@ -52,7 +51,7 @@ def cmd_list(args) -> None:
 
 def cmd_run(args) -> None:
     from sewfmu.scenarios.analyses import studies
-    from sewfmu.scenarios.runs.results import run_scenario, run_study
+    from sewfmu.scenarios.runs.results import run_study
 
     if args.scenario in studies():
         if args.set:
@@ -65,73 +64,58 @@ def cmd_run(args) -> None:
         print(f"{args.scenario}: results in {out}/")
         print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
         return
-    from sewfmu.scenarios.runs.progress import TerminalProgress
-
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
-    progress = TerminalProgress(scenario.name)
-    try:
-        summary = run_scenario(scenario, out, plot=args.plot, progress=progress,
-                               animate=args.animate, report=args.report)
-    finally:
-        progress.close()
+    run = api.run(scenario, out=out, plot=args.plot, animate=args.animate, report=args.report,
+                  progress=True)
     print(f"{scenario.name}: results in {out}/")
-    figures = summary.get("runs", {"": summary})
-    for label, fig in figures.items():
-        if fig.get("master_unconverged_steps"):
+    runs = run.runs or {"": run}
+    for label, each in runs.items():
+        if each.summary.get("master_unconverged_steps"):
             print(f"sewfmu: warning: {label + ': ' if label else ''}the iterative coupling did "
-                  f"not converge in {fig['master_unconverged_steps']} steps (a shorter step or "
-                  f"a looser experiment.tolerance helps)", file=sys.stderr)
-    for label, fig in figures.items():
-        shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in fig.items()
-                          if k not in ("scenario", "master", "step", "stop_time", "provenance",
-                                       "units"))
+                  f"not converge in {each.summary['master_unconverged_steps']} steps (a shorter "
+                  f"step or a looser experiment.tolerance helps)", file=sys.stderr)
+    for label, each in runs.items():
+        shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in each.figures.items())
         print(f"  {label + ': ' if label else ''}{shown}")
 
 
 def cmd_compare(args) -> None:
-    from sewfmu.scenarios.runs.compare import compare
-
     scenario = _load_with_sets(args.scenario, args.set)
-    rows = compare(scenario, rtol=args.rtol)
+    figures = api.compare(scenario, rtol=args.rtol)
     print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
           f"co-simulation vs monolithic solution")
     if args.rtol is None:
-        _print_side_by_side(rows, "co-simulation", "monolithic")
+        _print_side_by_side([(k, f["cosim"], f["monolithic"], f["difference"])
+                             for k, f in figures.items()], "co-simulation", "monolithic")
         return
     loose = f"rtol {args.rtol:g}"
     print(f"  {'figure':22s} {'co-simulation':>14s} {loose:>14s} {'tight':>14s} "
           f"{'co-sim error':>13s} {loose + ' error':>17s}")
-    for key, a, c, b, ea, ec in rows:
-        print(f"  {key:22s} {_cell(a, 14)} {_cell(c, 14)} {_cell(b, 14)} {_cell(ea, 13)} "
-              f"{_cell(ec, 17)}")
+    for key, f in figures.items():
+        print(f"  {key:22s} {_cell(f['cosim'], 14)} {_cell(f['monolithic_rtol'], 14)} "
+              f"{_cell(f['monolithic'], 14)} {_cell(f['difference'], 13)} "
+              f"{_cell(f['rtol_error'], 17)}")
 
 
 def cmd_sweep(args) -> None:
-    from sewfmu.scenarios.runs.sweep import parse_grid_option, points_of, run_sweep, sweep_pictures
+    from sewfmu.scenarios.runs.sweep import parse_grid_option
 
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
-    points = points_of(scenario, grid)
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_sweep"
-    rows = run_sweep(scenario, points, out, workers=args.workers, scheduler=args.scheduler,
-                     keep_results=args.results, progress=not args.quiet)
-    failed = [r for r in rows if r["status"] != "ok"]
-    print(f"{scenario.name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
-    for row in failed:
-        values = ",".join(label_of(name, row[name]) for name, _ in points[0].values)
+    sweep = api.sweep(scenario, grid, workers=args.workers, scheduler=args.scheduler, out=out,
+                      plot=args.plot, report=args.report, progress=not args.quiet,
+                      results=args.results)
+    print(f"{scenario.name}: {len(sweep.rows)} points, {len(sweep.failed)} failed; table in "
+          f"{out}/sweep.csv")
+    for row in sweep.failed:
+        values = ",".join(label_of(name, row[name]) for name in sweep.swept)
         print(f"  failed: {values}: {row['error']}")
-    if rows and len(failed) == len(rows):
-        raise ScenarioError(f"every point of the sweep failed (see {out}/sweep.csv)")
-    if args.plot or args.report:
-        sweep_pictures(scenario, rows, [name for name, _ in points[0].values], out,
-                       report=args.report)
 
 
 def cmd_show(args) -> None:
-    from sewfmu.api import show
-
-    sys.stdout.write(show(args.scenario))
+    sys.stdout.write(api.show(args.scenario))
 
 
 def cmd_export_ssp(args) -> None:

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Callable
 
+from sewfmu.components.parameters import did_you_mean
+
 
 @dataclass(frozen=True)
 class Study:
@@ -67,6 +69,16 @@ class Mechanism:
     regression: dict[str, RegressionCase] = field(default_factory=dict)
 
 
+# what a summary says of the run itself rather than of the mechanism
+RUN_KEYS = ("scenario", "master", "step", "stop_time", "provenance", "units", "runs", "compare")
+
+
+def figures_of(summary: dict) -> dict:
+    """A summary's key figures, with the master's counts and the wall time: what `sewfmu run`
+    prints, a sweep's row holds and a cross-check compares."""
+    return {k: v for k, v in summary.items() if k not in RUN_KEYS}
+
+
 @functools.cache
 def mechanisms() -> dict[str, Mechanism]:
     """Every analysis module of this package by name -> its MECHANISM (sub-packages hold what
@@ -82,7 +94,7 @@ def mechanisms() -> dict[str, Mechanism]:
 def mechanism(analysis: str) -> Mechanism:
     known = mechanisms()
     if analysis not in known:
-        raise RoleError(f"unknown analysis {analysis!r}{_close(analysis, known)} "
+        raise RoleError(f"unknown analysis {analysis!r}{did_you_mean(analysis, known)} "
                         f"(known: {', '.join(known)})")
     return known[analysis]
 
@@ -96,13 +108,6 @@ def studies() -> dict[str, tuple[str, Study]]:
     """Every mechanism's studies: study name -> (analysis, study)."""
     return {name: (analysis, study) for analysis, m in mechanisms().items()
             for name, study in m.studies.items()}
-
-
-def _close(name: str, known) -> str:
-    import difflib
-
-    close = difflib.get_close_matches(name, list(known), n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 class RoleError(ValueError):

@@ -10,10 +10,11 @@ from __future__ import annotations
 import warnings
 from typing import Callable
 
+from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.cosim.divergence import bound_text, declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import LogCollector, kind_of
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError, did_you_mean
+from sewfmu.scenarios.format.values import ScenarioError
 
 
 class InputLeftOpen(UserWarning):

@@ -8,9 +8,10 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.format.scenario import Scenario, from_dict
 from sewfmu.scenarios.format.ssp_import import load_ssp
-from sewfmu.scenarios.format.values import ScenarioError, did_you_mean
+from sewfmu.scenarios.format.values import ScenarioError
 
 
 def catalogue() -> dict[str, Path]:

@@ -42,22 +42,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS, parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import (
     ScenarioError,
     check_instance_name,
-    did_you_mean,
     label_of,
     positive,
     seconds,
     short,
 )
-
-# the masters and their settings (defaults, the tolerances each honours): one class per master in
-# scenarios/algorithm_settings.py
-MASTERS = MASTER_NAMES
 
 
 @dataclass(frozen=True)
@@ -227,7 +223,7 @@ class Scenario:
             raise ScenarioError(f"{where}: {err}") from None
 
     def _set_experiment(self, key: str, value: Any, origin: str) -> None:
-        choices = {"master": MASTERS, "acceleration": ACCELERATIONS}
+        choices = {"master": MASTER_NAMES, "acceleration": ACCELERATIONS}
         if key in choices:
             if value not in choices[key]:
                 raise ScenarioError(f"{origin} experiment.{key}: must be one of {choices[key]}, "
@@ -314,8 +310,8 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     if ("revolutions" in exp) == ("stop_time" in exp):
         raise ScenarioError(f"{source}: [experiment] needs exactly one of revolutions, stop_time")
     master = exp.get("master", "jacobi")
-    if master not in MASTERS:
-        raise ScenarioError(f"{source}: experiment.master must be one of {MASTERS}, got {master!r}")
+    if master not in MASTER_NAMES:
+        raise ScenarioError(f"{source}: experiment.master must be one of {MASTER_NAMES}, got {master!r}")
     if "step" not in exp:
         raise ScenarioError(f"{source}: missing experiment.step")
 

@@ -27,14 +27,6 @@ def check_instance_name(name: str) -> None:
                          f"not 'experiment'), got {name!r}")
 
 
-def did_you_mean(name: str, known) -> str:
-    """ "; did you mean 'x'?" for the closest known name, or nothing."""
-    import difflib
-
-    close = difflib.get_close_matches(name, list(known), n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
-
-
 def label_of(target: str, value: Any) -> str:
     """`instance.parameter=value` as a short label (a folder name, a legend)."""
     if isinstance(value, float):

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sewfmu.scenarios.analyses import figures_of
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
@@ -43,9 +44,7 @@ def crosscheck(scenario: Scenario, host: str, out_dir: Path, fmu_dir: Path | Non
         theirs["host"] = host
         write_json(theirs, staging / "summary.json")
     rows = []
-    for key, value in mine.items():
-        if key in ("scenario", "master", "step", "stop_time") or isinstance(value, dict):
-            continue
+    for key, value in figures_of(mine).items():
         b = theirs.get(key)
         diff = value - b if isinstance(value, (int, float)) and isinstance(b, (int, float)) \
             else None

@@ -22,11 +22,11 @@ import uuid
 import zipfile
 from pathlib import Path
 
+from sewfmu.scenarios.cosim.algorithms import FIXED_STEP
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
-FIXED_STEP_MASTERS = ("jacobi", "gauss-seidel")
 # FMI 3.0's words for FMI 2.0's types (the container's library uses them whatever its version)
 _FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
 
@@ -39,7 +39,7 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
     from fmpy.container_fmu.config import Component, Configuration, Connection
 
     output = _checked_output(Path(output))
-    if scenario.master not in FIXED_STEP_MASTERS:
+    if scenario.master not in FIXED_STEP:
         raise ScenarioError(f"{scenario.source}: the exported FMU steps its components at a "
                             f"fixed step (Jacobi); this scenario runs with the {scenario.master} "
                             f"master: export it with --set experiment.master=\"jacobi\" (and a "

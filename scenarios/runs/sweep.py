@@ -114,6 +114,7 @@ WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master
 
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
+    from sewfmu.scenarios.analyses import figures_of
     from sewfmu.scenarios.runs.results import write_csv
     from sewfmu.scenarios.runs.runner import simulate, summarize
 
@@ -128,8 +129,7 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
             write_csv(result, folder_for(Path(results_dir), point.label) / "results.csv")
     except Exception as err:                     # recorded, and the sweep goes on
         return failed_row(row, err)
-    figures = {k: v for k, v in figures.items() if k not in ("scenario", "master", "step", "units")}
-    return {**row, "status": "ok", **figures}
+    return {**row, "status": "ok", "stop_time": figures["stop_time"], **figures_of(figures)}
 
 
 def run_points(scenario: Scenario, points: list[Point], keys: list[str],

@@ -37,6 +37,12 @@ class MonolithicSolution:
     n_rhs: int
 
 
+def _fabric_push(p, y, v):
+    """The fabric's Kelvin-Voigt force on the punch while they touch, before the contact's
+    one-sidedness (F2 = max(0, this)); y and v may be arrays."""
+    return -(p.c2 * y + p.b2 * v)
+
+
 def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: float,
           sample_from: float = 0.0, method: str = "DOP853", rtol: float = 1e-10,
           atol: float = 1e-13, sample_switches: bool = True) -> MonolithicSolution:
@@ -55,12 +61,12 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
     def forces(t, y, v, contact, spring_on):
         xi, xi_dot, _ = excitation(t)
         f1 = p.F10 + p.c1 * y + p.b1 * v
-        f2 = -(p.c2 * y + p.b2 * v) if contact else 0.0
+        f2 = _fabric_push(p, y, v) if contact else 0.0
         f3 = p.F30 + p.c3 * (xi - y) + p.b3 * (xi_dot - v) if spring_on else 0.0
         return f1, f2, f3
 
     def contact_g(t, s):               # < 0 inside {y < 0 and F2* > 0}
-        return max(s[0], p.c2 * s[0] + p.b2 * s[1])
+        return max(s[0], -_fabric_push(p, s[0], s[1]))
 
     def spring_g(t, s):                # < 0 inside {Delta > 0 and F3* > 0}
         xi, xi_dot, _ = excitation(t)
@@ -131,7 +137,7 @@ def solve(shaft: dict, linkage: dict, punch: dict, t_end: float, sample_step: fl
 def _stop_force(p, y, v, xi_ddot, contact):
     """The stop force that makes the punch move with the slider."""
     f1 = p.F10 + p.c1 * y + p.b1 * v
-    f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+    f2 = max(0.0, _fabric_push(p, y, v)) if contact else 0.0
     return p.m * (xi_ddot + GRAVITY) + f1 - f2
 
 
@@ -146,7 +152,7 @@ def _holds(p, t, state, contact, spring_on, excitation) -> bool:
     if f3_star < 0.5 * p.F30 or not 0.0 <= _stop_force(p, xi, xi_dot, xi_ddot, contact) <= p.F30:
         return False
     f1 = p.F10 + p.c1 * y + p.b1 * v
-    f2 = max(0.0, -(p.c2 * y + p.b2 * v)) if contact else 0.0
+    f2 = max(0.0, _fabric_push(p, y, v)) if contact else 0.0
     a = (-f1 + f2 + (f3_star if spring_on else 0.0)) / p.m - GRAVITY
     period = 2.0 * math.pi * math.sqrt(p.m / (p.c1 + p.c2 + p.c3))
     return 2.0 * abs(xi_dot - v) <= abs(xi_ddot - a) * period / 16
@@ -163,7 +169,7 @@ def _ride_on_stop(p, t0, t_end, contact, excitation):
 
     def touch(t):
         xi, xi_dot, _ = excitation(t)
-        g = max(xi, p.c2 * xi + p.b2 * xi_dot)
+        g = max(xi, -_fabric_push(p, xi, xi_dot))
         return g if contact else -g
 
     if release(t0) > 0.0:                 # e.g. the fabric took over the load at a landing
@@ -208,7 +214,7 @@ def _sample(pieces, t_end, sample_step, sample_from, shaft, linkage, p, switches
             held[mask] = on_stop
     motion = np.array([shaft.state(t) for t in times])
     e = sampled(linkage.motion, motion[:, 0], motion[:, 1], motion[:, 2])
-    f2 = np.where(contact, np.maximum(-(p.c2 * y + p.b2 * v), 0.0), 0.0)
+    f2 = np.where(contact, np.maximum(_fabric_push(p, y, v), 0.0), 0.0)
     f3 = np.where(spring_on, p.F30 + p.c3 * (e.xi - y) + p.b3 * (e.xi_dot - v), 0.0)
     if p.compression_only:
         f3 = np.maximum(f3, 0.0)

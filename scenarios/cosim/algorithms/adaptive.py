@@ -37,7 +37,7 @@ MAX_FACTOR = 16.0
 
 
 class Adaptive(Jacobi):
-    name = "adaptive"
+    name = AdaptiveSettings.master
     Settings = AdaptiveSettings
     rolls_back = True
     variable_step = True

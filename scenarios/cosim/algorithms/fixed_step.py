@@ -20,7 +20,7 @@ from sewfmu.scenarios.format.scenario import ScenarioError
 
 
 class Jacobi(Algorithm):
-    name = "jacobi"
+    name = JacobiSettings.master
     Settings = JacobiSettings
 
     def advance(self, system, t, h):
@@ -40,7 +40,7 @@ class Jacobi(Algorithm):
 
 
 class GaussSeidel(Algorithm):
-    name = "gauss-seidel"
+    name = GaussSeidelSettings.master
     Settings = GaussSeidelSettings
 
     def plan(self, system):

@@ -102,7 +102,7 @@ class Iterative(Jacobi):
     exchanged on it agree with those assumed (see the module docstring). Without a loop it is
     Jacobi."""
 
-    name = "iterative"
+    name = IterativeSettings.master
     Settings = IterativeSettings
     rolls_back = True
 
