@@ -3,7 +3,7 @@
 A point in motion is a `Motion`: position, velocity and acceleration as separate x and y
 components, plain floats. Everything here uses the standard library only (`math`), because this
 code runs inside the FMUs, in whatever Python the FMI host embeds; analyses that want a whole
-crank revolution at once evaluate it sample by sample (scenarios/sampling.py).
+crank revolution at once evaluate it sample by sample (scenarios/analyses/solutions/sampling.py).
 
 Velocities and accelerations come from the differentiated loop-closure equations (never from
 finite differences): for a dyad with |X - P| = r_P and |X - Q| = r_Q,

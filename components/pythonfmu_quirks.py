@@ -1,5 +1,5 @@
 """What an FMU on pythonfmu 0.7.0 or pythonfmu3 0.3.4 must do that the standard does not ask,
-in one place (the host side's counterpart is scenarios/pythonfmu_host.py; docs/fmi.md says why).
+in one place (the host side's counterpart is scenarios/cosim/pythonfmu_host.py; docs/fmi.md says why).
 
 - No exception may reach pythonfmu: it turns every one into Fatal and keeps the interpreter lock,
   after which a host may call nothing, not even FreeInstance. The getters and setters below
@@ -9,7 +9,7 @@ in one place (the host side's counterpart is scenarios/pythonfmu_host.py; docs/f
 - sys.path: pythonfmu puts the instance's resources folder first at every instantiation and never
   takes it out (forget_resources_path).
 - Exit: pythonfmu 0.7.0 releases its interpreter state twice when a Python host exits with the
-  library still loaded (scenarios/pythonfmu_host.py says how); in a Python host the FMU has its
+  library still loaded (scenarios/cosim/pythonfmu_host.py says how); in a Python host the FMU has its
   own library release that state at Python's exit, first (release_state_at_exit), so that a
   host that does not do it itself is safe too.
 """

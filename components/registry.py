@@ -1,5 +1,7 @@
 """The FMUs sewfmu builds: model name -> (module in this package, slave class)."""
 
+import importlib
+
 FMUS: dict[str, tuple[str, str]] = {
     "MainShaft": ("shaft_fmu", "MainShaftSlave"),
     "PunchLinkage": ("punch_fmu", "PunchLinkageSlave"),
@@ -20,9 +22,7 @@ FMI_VERSIONS = (2, 3)
 def parameter_units(fmu: str) -> dict[str, str]:
     """The declared unit of every parameter and input of one of sewfmu's FMUs, from its slave
     class (no FMU needs to be built to read them)."""
-    import importlib
-
-    from .parameters import parameter_info
+    from .parameters import parameter_info  # the registry is read without the models
 
     module, slave = FMUS[fmu]
     cls = getattr(importlib.import_module(f"{__package__}.{module}"), slave)

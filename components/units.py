@@ -73,7 +73,7 @@ def in_unit(text: str, unit: str) -> float:
 def unit_definitions(parent, used) -> None:
     """<Unit> elements (FMI 2.0 and 3.0 alike) under `parent` for the units used: the SI base
     units and the display units."""
-    from xml.etree.ElementTree import SubElement
+    from xml.etree.ElementTree import SubElement  # only when writing a modelDescription
 
     for name in sorted(used):
         unit = SubElement(parent, "Unit", name=name)

@@ -5,11 +5,13 @@
     r.summary["F2_weld_mean"], r.series["time"], r.series["punch.F2"], r.units["punch.F2"]
 
 run, sweep, compare, load, build and show do what the command line's commands of those names
-do (docs/api.md). The models are in sewfmu.components, the master and scenarios in
-sewfmu.scenarios.
+do (docs/api.md). Public: this module and sewfmu.components (the models); sewfmu.scenarios is
+internal (docs/architecture.md).
 """
 from sewfmu._version import __version__
 from sewfmu.api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
+from sewfmu.scenarios.cosim.divergence import Diverged
+from sewfmu.scenarios.cosim.fmi_calls import CosimError
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
-           "Run", "Sweep", "Scenario", "ScenarioError"]
+           "Run", "Sweep", "Scenario", "ScenarioError", "CosimError", "Diverged"]

@@ -22,7 +22,8 @@ from typing import Any, Mapping
 from sewfmu.scenarios.analyses import figure_units, figures_of
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
-from sewfmu.scenarios.format.scenario import Scenario, ScenarioError
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
            "Scenario", "ScenarioError"]
@@ -53,7 +54,7 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
 
 def show(scenario: str) -> str:
     """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`)."""
-    from sewfmu.scenarios.format.loader import resolve
+    from sewfmu.scenarios.format.loader import resolve  # loaded on first use (start-up time)
 
     path = resolve(scenario)
     if path.suffix.lower() != ".toml":
@@ -103,9 +104,12 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
     a progress bar on the terminal."""
-    from sewfmu.scenarios.runs.progress import TerminalProgress
-    from sewfmu.scenarios.runs.results import write_outputs
-    from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
+    from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.results import write_outputs  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.variants import (  # loaded on first use (start-up time)
+        run_variants,
+        summary_of_runs,
+    )
 
     sc = load(scenario, set)
     if (plot or animate or report) and out is None:
@@ -127,7 +131,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
 
 
 def _run_of(name: str, result, summary: dict, out: Path | None) -> Run:
-    import numpy as np
+    import numpy as np  # numpy: not at `import sewfmu`
 
     names = list(result.columns)
     series = np.empty(len(result.time), dtype=[("time", "f8")] + [(n, "f8") for n in names])
@@ -155,7 +159,7 @@ class Sweep:
 
     @property
     def table(self):
-        import numpy as np
+        import numpy as np  # numpy: not at `import sewfmu`
 
         columns = self.swept + [k for k in self.units if k not in self.swept]
         data = np.full(len(self.rows), np.nan, dtype=[(c, "f8") for c in columns])
@@ -168,7 +172,7 @@ class Sweep:
 
     def to_pandas(self):
         """The rows as a pandas DataFrame (pandas must be installed)."""
-        import pandas as pd
+        import pandas as pd  # optional extra (pandas)
 
         return pd.DataFrame(self.rows).drop(columns=["key"], errors="ignore")
 
@@ -185,7 +189,11 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
     writes (and an interrupted sweep into the same folder resumes); `results` keeps each point's
     results.csv there. A sweep whose every point failed is a ScenarioError."""
-    from sewfmu.scenarios.runs.sweep import points_of, run_sweep, sweep_pictures
+    from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
+        points_of,
+        run_sweep,
+        sweep_pictures,
+    )
 
     sc = load(scenario, set)
     if grid is not None and not isinstance(grid, Mapping):
@@ -214,7 +222,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
 
 def _unit_of(sc: Scenario, target: str) -> str:
     """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
-    from sewfmu.components.registry import parameter_units
+    from sewfmu.components.registry import parameter_units  # loaded on first use (start-up time)
 
     inst, _, key = target.partition(".")
     if inst == "experiment":
@@ -228,7 +236,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
     scenarios): {figure: {"cosim", "monolithic", "difference", "unit"}}; with `rtol` also the
     monolithic solver at that tolerance ("monolithic_rtol", "rtol_error")."""
-    from sewfmu.scenarios.runs.compare import compare as compare_rows
+    from sewfmu.scenarios.runs.compare import compare as compare_rows  # loaded on first use (start-up time)
 
     sc = load(scenario, set)
     units = {**figure_units(sc.analysis), "wall_time_s": "s"}
@@ -249,9 +257,12 @@ def build(fmi: int = 2, dest: str | Path | None = None,
           names: list[str] | None = None) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
     fmus/fmi3/); return their paths."""
-    from sewfmu.components.parameters import did_you_mean
-    from sewfmu.components.registry import FMUS
-    from sewfmu.scenarios.fmu_build.build import build_fmu, default_fmu_dir
+    from sewfmu.components.parameters import did_you_mean  # loaded on first use (start-up time)
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.build import (  # loaded on first use (start-up time)
+        build_fmu,
+        default_fmu_dir,
+    )
 
     if isinstance(fmi, bool) or fmi not in (2, 3):
         raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")
@@ -264,7 +275,7 @@ def build(fmi: int = 2, dest: str | Path | None = None,
 
 
 def _frame(series, index: str):
-    import pandas as pd
+    import pandas as pd  # optional extra (pandas)
 
     return pd.DataFrame(series).set_index(index)
 

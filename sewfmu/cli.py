@@ -5,9 +5,14 @@ their wing. Errors become one line (`explain`)."""
 from __future__ import annotations
 
 import argparse
+import importlib
+import json
 import os
 import sys
+import warnings
+from importlib import metadata
 from pathlib import Path
+from urllib.parse import unquote, urlparse
 
 from sewfmu import api
 from sewfmu._version import __version__
@@ -32,10 +37,8 @@ def cmd_build(args) -> None:
 
 
 def cmd_list(args) -> None:
-    import importlib
-
-    from sewfmu.components.registry import FMUS
-    from sewfmu.scenarios.analyses import studies
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
+    from sewfmu.scenarios.analyses import studies  # loaded on first use (start-up time)
 
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
@@ -50,8 +53,8 @@ def cmd_list(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from sewfmu.scenarios.analyses import studies
-    from sewfmu.scenarios.runs.results import run_study
+    from sewfmu.scenarios.analyses import studies  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.results import run_study  # loaded on first use (start-up time)
 
     if args.scenario in studies():
         if args.set:
@@ -99,7 +102,7 @@ def cmd_compare(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from sewfmu.scenarios.runs.sweep import parse_grid_option
+    from sewfmu.scenarios.runs.sweep import parse_grid_option  # loaded on first use (start-up time)
 
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
@@ -119,15 +122,15 @@ def cmd_show(args) -> None:
 
 
 def cmd_export_ssp(args) -> None:
-    from sewfmu.scenarios.interop.ssp_export import export
+    from sewfmu.scenarios.interop.ssp_export import export  # loaded on first use (start-up time)
 
     scenario = _load_with_sets(args.scenario, args.set)
     print(export(scenario, Path(args.output)))
 
 
 def cmd_export_fmu(args) -> None:
-    from sewfmu.scenarios.fmu_build.build import fmus_for
-    from sewfmu.scenarios.interop.export_fmu import export_fmu
+    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.interop.export_fmu import export_fmu  # loaded on first use (start-up time)
 
     scenario = _load_with_sets(args.scenario, args.set)
     scenario.fmi = args.fmi            # the components of the FMI version of the container
@@ -137,9 +140,9 @@ def cmd_export_fmu(args) -> None:
 def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
-    from sewfmu.components.registry import FMUS
-    from sewfmu.scenarios.fmu_build.build import fmus_for_names
-    from sewfmu.scenarios.references import regression as references
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.build import fmus_for_names  # loaded on first use (start-up time)
+    from sewfmu.scenarios.references import regression as references  # loaded on first use (start-up time)
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)
     folder = Path(args.refs) if args.refs else references.REFERENCE_DIR
@@ -150,7 +153,7 @@ def cmd_references(args) -> None:
         for written in references.regenerate(paths, folder):
             print(f"wrote {written}")
         return
-    from sewfmu.scenarios.references.reference_check import tolerance
+    from sewfmu.scenarios.references.reference_check import tolerance  # loaded on first use (start-up time)
     rtol, atol = tolerance(args.rtol, "--rtol"), tolerance(args.atol, "--atol")
     problems = [p for name in FMUS for p in references.check(name, paths[name], folder, rtol, atol)]
     for line in problems:
@@ -162,7 +165,10 @@ def cmd_references(args) -> None:
 
 def _references_of_files(args) -> None:
     """`sewfmu references --fmu PATH ...`: any FMU against its references (reference_check.py)."""
-    from sewfmu.scenarios.references import fmu_reference, reference_check
+    from sewfmu.scenarios.references import (  # loaded on first use (start-up time)
+        fmu_reference,
+        reference_check,
+    )
 
     if args.regenerate:
         if not args.refs:
@@ -192,9 +198,10 @@ def _references_of_files(args) -> None:
 
 
 def cmd_host_env(args) -> None:
-    import os
-
-    from sewfmu.scenarios.interop.hosts import check_host_environment, host_environment
+    from sewfmu.scenarios.interop.hosts import (  # loaded on first use (start-up time)
+        check_host_environment,
+        host_environment,
+    )
 
     env = host_environment()
     print("# what a host that is not a Python process (the ecos tool, an FMI tool in C++ or")
@@ -213,7 +220,7 @@ def cmd_host_env(args) -> None:
 
 
 def cmd_crosscheck(args) -> None:
-    from sewfmu.scenarios.interop.cross_check import crosscheck
+    from sewfmu.scenarios.interop.cross_check import crosscheck  # loaded on first use (start-up time)
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_{args.host}"
@@ -352,7 +359,6 @@ def main(argv=None) -> int:
             stream.reconfigure(errors="backslashreplace")
     args = parser.parse_args(argv)
     interrupt_on_sigterm()
-    import warnings
     # a warning (an SSP input that nothing sets) is one line, as errors are
     warnings.showwarning = lambda message, *_, **__: print(f"sewfmu: warning: {message}",
                                                            file=sys.stderr)
@@ -380,11 +386,11 @@ def main(argv=None) -> int:
 
 def explain(err: Exception, command: str) -> str:
     """An error as one line that says what was wrong and where."""
-    from sewfmu.scenarios.analyses import RoleError, RunTooShort
-    from sewfmu.scenarios.cosim.divergence import Diverged
-    from sewfmu.scenarios.cosim.fmi_calls import CosimError
-    from sewfmu.scenarios.files.outputs import OutputError
-    from sewfmu.scenarios.interop.hosts import HostError
+    from sewfmu.scenarios.analyses import RoleError, RunTooShort  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.divergence import Diverged  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.fmi_calls import CosimError  # loaded on first use (start-up time)
+    from sewfmu.scenarios.files.outputs import OutputError  # loaded on first use (start-up time)
+    from sewfmu.scenarios.interop.hosts import HostError  # loaded on first use (start-up time)
 
     if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,
                         RoleError, Diverged)):
@@ -413,10 +419,6 @@ EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecosp
 def install_command(extra: str) -> str:
     """The pip command that adds an extra to this sewfmu, from where it was installed: its
     checkout (editable or not), its wheel, or the package index."""
-    import json
-    from importlib import metadata
-    from urllib.parse import unquote, urlparse
-
     # (a build's sewfmu.egg-info in the working folder is a distribution too, without origin)
     found = [d.read_text("direct_url.json") for d in metadata.distributions(name="sewfmu")]
     try:

@@ -17,7 +17,7 @@ settings.register_profile("ci", max_examples=25, derandomize=True, database=None
 settings.register_profile("explore", max_examples=1000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
-# the FMUs the tests build are extracted into a cache of this session's (scenarios/fmu_cache.py),
+# the FMUs the tests build are extracted into a cache of this session's (scenarios/cosim/fmu_cache.py),
 # not the user's: every build is a new file, and would stay there for weeks
 if "SEWFMU_CACHE_DIR" not in os.environ:
     os.environ["SEWFMU_CACHE_DIR"] = tempfile.mkdtemp(prefix="sewfmu_test_cache_")

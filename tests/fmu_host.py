@@ -83,7 +83,7 @@ class Host:
                 self.fmu.terminate()
             except FMICallException:
                 pass
-            self._free()                # the library stays loaded (see scenarios/master.py)
+            self._free()                # the library stays loaded (see scenarios/cosim/master.py)
         self.failed = True             # no call after this one
 
 

@@ -97,7 +97,7 @@ def test_every_key_of_the_scenario_format_is_documented():
     """docs/scenarios.md has a row (meaning, default, example) for every key the format reads,
     and none it does not."""
     from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
-    from sewfmu.scenarios.format.scenario import COMPARE_KEYS, INSTANCE_KEYS, SWEEP_KEYS, TOP_KEYS
+    from sewfmu.scenarios.format.parse import COMPARE_KEYS, INSTANCE_KEYS, SWEEP_KEYS, TOP_KEYS
 
     assert _documented_keys("The top level") == set(TOP_KEYS)
     assert _documented_keys("[experiment]") == set(EXPERIMENT_KEYS)

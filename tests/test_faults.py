@@ -21,7 +21,7 @@ import pytest
 
 from sewfmu.cli import main
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
 from sewfmu.scenarios.runs.workers import WorkerDied, run_tasks
 

@@ -1,4 +1,4 @@
-"""Extracted FMUs kept between runs and processes (scenarios/fmu_cache.py): one folder per FMU
+"""Extracted FMUs kept between runs and processes (scenarios/cosim/fmu_cache.py): one folder per FMU
 content, shared by concurrent runs, its bytecode kept, stale entries removed, and a plain
 temporary extraction where there is no cache to write."""
 import os

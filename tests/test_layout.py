@@ -1,6 +1,9 @@
-"""The shape of the code, as the design asks it to stay: no circle of imports (function-level
-imports included), the FMU code never importing the host side, no module over 500 lines."""
+"""The shape of the code, as the design asks it to stay: the wings and what each may import, no
+circle of imports (function-level imports included), no module over 500 lines, every
+function-level import with its reason, one spelling of every import (absolute outside the FMU's
+code), and the front doors imported by nothing inside."""
 import ast
+import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -73,3 +76,100 @@ def test_no_module_is_a_grab_bag():
     long = {name: n for name, (path, _) in modules.items()
             if (n := len(path.read_text().splitlines())) > MAX_LINES}
     assert not long
+
+
+# what each wing may not import (sewfmu.scenarios.<wing>; "front doors": sewfmu.api, sewfmu.cli).
+# Read downwards: files < format < cosim < runs < interop; references and fmu_build beside them.
+FORBIDDEN = {
+    "sewfmu.components": ("sewfmu.scenarios", "sewfmu.api", "sewfmu.cli"),
+    "sewfmu.scenarios.files": ("sewfmu.scenarios.format", "sewfmu.scenarios.cosim",
+                               "sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
+                               "sewfmu.scenarios.references", "sewfmu.scenarios.fmu_build",
+                               "sewfmu.scenarios.analyses", "sewfmu.scenarios.animations"),
+    "sewfmu.scenarios.format": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
+                                "sewfmu.scenarios.interop", "sewfmu.scenarios.references",
+                                "sewfmu.scenarios.fmu_build"),
+    "sewfmu.scenarios.cosim": ("sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
+                               "sewfmu.scenarios.references", "sewfmu.scenarios.fmu_build"),
+    "sewfmu.scenarios.runs": ("sewfmu.scenarios.interop", "sewfmu.scenarios.references"),
+    "sewfmu.scenarios.analyses": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
+                                  "sewfmu.scenarios.interop", "sewfmu.scenarios.references",
+                                  "sewfmu.scenarios.fmu_build"),
+    "sewfmu.scenarios.fmu_build": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
+                                   "sewfmu.scenarios.interop", "sewfmu.scenarios.references"),
+    "sewfmu.scenarios": ("sewfmu.api", "sewfmu.cli"),
+}
+
+
+def _under(name: str, prefix: str) -> bool:
+    return name == prefix or name.startswith(prefix + ".")
+
+
+def test_each_wing_imports_only_what_lies_below_it():
+    _, edges = _graph()
+    broken = sorted(f"{source} imports {target}" for source, targets in edges.items()
+                    for wing, banned in FORBIDDEN.items() if _under(source, wing)
+                    for target in targets if any(_under(target, b) for b in banned))
+    assert not broken, broken
+
+
+def test_scenarios_keeps_only_its_wings_at_its_top():
+    top = sorted(p.name for p in (REPO / "scenarios").glob("*.py"))
+    assert top == ["__init__.py"], top
+    wings = sorted(p.name for p in (REPO / "scenarios").iterdir()
+                   if p.is_dir() and (p / "__init__.py").exists())
+    assert wings == ["analyses", "animations", "cosim", "files", "fmu_build", "format", "interop",
+                     "references", "runs"], wings
+
+
+def test_components_hold_only_what_an_fmu_carries():
+    """Every module of components/ goes into an FMU: the build copies the folder whole."""
+    from sewfmu.components.registry import FMUS
+
+    carried = {p.stem for p in (REPO / "components").glob("*.py")}
+    fmu_modules = {module for module, _ in FMUS.values()}
+    assert fmu_modules <= carried
+    for path in (REPO / "components").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and not getattr(node, "level", 0):
+                names = [node.module] if isinstance(node, ast.ImportFrom) else \
+                    [a.name for a in node.names]
+                for name in names:
+                    top = name.split(".")[0]
+                    assert top in sys.stdlib_module_names or name == "sewfmu._version" or \
+                        name.startswith("pythonfmu"), f"{path.name} imports {name}"
+
+
+def test_imports_outside_the_fmu_code_are_absolute():
+    relative = []
+    for folder in ("scenarios", "sewfmu", "tests", "bench"):
+        for path in (REPO / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.ImportFrom) and node.level:
+                    relative.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert not relative, relative
+
+
+def test_every_function_level_import_says_why():
+    """Function-level imports only where start-up time, an optional extra or the FMU's
+    standard-library rule needs them, each with its reason in a comment."""
+    silent = []
+    for folder in ("components", "scenarios", "sewfmu"):
+        for path in (REPO / folder).rglob("*.py"):
+            lines = path.read_text().splitlines()
+            for fn in ast.walk(ast.parse("\n".join(lines))):
+                if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    continue
+                for node in ast.walk(fn):
+                    if isinstance(node, (ast.Import, ast.ImportFrom)):
+                        span = lines[node.lineno - 2:node.end_lineno]
+                        if not any("#" in line for line in span):
+                            silent.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert not silent, sorted(set(silent))
+
+
+def test_the_algorithms_are_the_masters_the_format_knows():
+    from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
+    from sewfmu.scenarios.format.master_settings import MASTER_NAMES
+
+    assert list(ALGORITHMS) == list(MASTER_NAMES)

@@ -13,7 +13,7 @@ from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
 from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.format.master_settings import SETTINGS
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 from tests.fake_fmu import Failing, Integrator, Switch, fake_scenario, maker
 
 M = np.array([[0.0, 1.0], [-1.0, 0.0]])

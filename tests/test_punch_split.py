@@ -162,6 +162,6 @@ def test_the_body_alone_moves_as_the_punch_without_the_fabric():
 
 
 def test_gauss_seidel_refuses_a_feedback_loop(fmu_paths):
-    from sewfmu.scenarios.format.scenario import ScenarioError
+    from sewfmu.scenarios.format.values import ScenarioError
     with pytest.raises(ScenarioError, match="gauss-seidel.*feedback loop of body, fabric"):
         _split(fmu_paths, master="gauss-seidel")

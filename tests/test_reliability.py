@@ -17,7 +17,7 @@ from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 from tests.fmu_host import Host
 
 

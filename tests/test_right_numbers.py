@@ -18,7 +18,7 @@ from sewfmu.scenarios.analyses import RunTooShort
 from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.results import run_scenario
 from sewfmu.scenarios.runs.runner import summarize
 from tests.fmu_host import Host

@@ -38,7 +38,7 @@ class Study:
 
 @dataclass(frozen=True)
 class RegressionCase:
-    """How one FMU runs alone for its regression reference (scenarios/regression.py): until
+    """How one FMU runs alone for its regression reference (scenarios/references/regression.py): until
     `stop` at communication steps of `step`, its inputs `inputs(t)` (name -> array over the
     time grid t; None for an FMU without inputs), compared within `rel_tol`. The inputs come
     from the models of what drives the FMU in a machine, so that it works where it works hard."""
@@ -50,7 +50,7 @@ class RegressionCase:
 
 def shaft_at(omega: float) -> Callable[[object], dict]:
     """The inputs a linkage takes from a shaft turning at a constant omega [rad/s]."""
-    import numpy as np
+    import numpy as np  # numpy: not at `import sewfmu`
 
     return lambda t: {"phi": omega * t, "omega": np.full_like(t, omega),
                       "epsilon": np.zeros_like(t)}
@@ -62,10 +62,10 @@ class Mechanism:
     roles: dict[str, str]                  # role -> the FMU type that plays it
     figures: dict[str, str]                # key figure -> unit (summary.json, sweeps, reports)
     animation: str | None = None           # the module of scenarios/animations that draws it
-    monolithic: bool = False               # solved as one ODE by scenarios/punch_monolithic.py
+    monolithic: bool = False               # solved as one ODE (its module: monolithic_figures)
     studies: dict[str, Study] = field(default_factory=dict)
     # FMU type -> its regression case, for the FMUs this mechanism brings (the shared MainShaft's
-    # is scenarios/regression.py's)
+    # is scenarios/references/regression.py's)
     regression: dict[str, RegressionCase] = field(default_factory=dict)
 
 

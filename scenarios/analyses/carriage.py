@@ -54,9 +54,9 @@ def summary_of_run(result) -> dict:
 
 
 def plot(curves, path, title: str) -> None:
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, (ax_x, ax_a, ax_u) = plt.subplots(3, 1, sharex=True, figsize=(10, 8))
     for label, result in curves:
@@ -141,9 +141,9 @@ def resonance_study() -> dict:
 
 
 def plot_resonance(study: dict, path) -> None:
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, ax = plt.subplots(figsize=(9, 5))
     for name, curve in study["designs"].items():

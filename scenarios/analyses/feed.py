@@ -71,9 +71,9 @@ def _draw(ax, model: FeedLinkage, phi1: float, color) -> None:
 
 def plot(curves, path, title: str) -> None:
     """The mechanism at four crank angles with M's path; φ3, φ7, φ5 against φ1."""
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig = plt.figure(figsize=(12, 8))
     ax_mech = fig.add_subplot(1, 2, 1)
@@ -133,9 +133,9 @@ def ratio_study() -> dict:
 
 
 def plot_study(study: dict, path) -> None:
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, (ax_curves, ax_lever, ax_rods) = plt.subplots(1, 3, figsize=(15, 4.8))
     for row in study["lever_ratio"]:

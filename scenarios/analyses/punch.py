@@ -13,6 +13,8 @@ communication points and for the monolithic reference's dense samples:
 from __future__ import annotations
 
 import math
+import textwrap
+import time
 
 import numpy as np
 
@@ -131,9 +133,7 @@ def monolithic_figures(scenario, rtol: float | None = None,
     """Key figures of the punch drive solved as one ODE (DOP853, tight tolerances, or `rtol`
     with atol = rtol/1000) and the solver's wall time. `punch_roles`: the instances whose
     parameters together make the punch (the split drive's body and fabric)."""
-    import time
-
-    from sewfmu.components.shaft import ShaftParams
+    from sewfmu.components.shaft import ShaftParams  # loaded on first use (start-up time)
     from sewfmu.scenarios.analyses.solutions import punch_monolithic  # scipy: only when asked
 
     params = {role: dict(scenario.instances[name].parameters)
@@ -153,9 +153,9 @@ def monolithic_figures(scenario, rtol: float | None = None,
 # --- plots ------------------------------------------------------------------------------------
 def plot(curves, path, title: str) -> None:
     """y(φ) and F2(φ) over the last revolution; `curves` is a list of (label, run result)."""
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, (ax_y, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     for label, result in curves:
@@ -174,7 +174,6 @@ def plot(curves, path, title: str) -> None:
     for ax in (ax_y, ax_f):
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    import textwrap
     fig.suptitle("\n".join(textwrap.wrap(title, 80)), fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -183,7 +182,7 @@ def plot(curves, path, title: str) -> None:
 
 def excitation(t) -> dict:
     """The six-bar's excitation of the punch at ω = 200 s⁻¹ (its regression input)."""
-    from sewfmu.components.punch_linkage import PunchLinkage
+    from sewfmu.components.punch_linkage import PunchLinkage  # loaded on first use (start-up time)
 
     e = sampled(PunchLinkage().motion, 200.0 * t, 200.0, 0.0)
     return {"xi": e.xi, "xi_dot": e.xi_dot, "xi_ddot": e.xi_ddot}

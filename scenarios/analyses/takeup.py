@@ -8,6 +8,7 @@ velocity that the FMU outputs.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
 
@@ -103,11 +104,9 @@ def _model_of(result) -> TakeupLinkage:
 def plot(curves, path, title: str) -> None:
     """E's path with the linkage drawn at four crank angles; displacement, speed (analytic and
     central-difference) and acceleration of E against the crank angle (last revolution)."""
-    import textwrap
-
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     (ax_path, ax_disp), (ax_speed, ax_acc) = axes
@@ -203,9 +202,9 @@ def tolerance_study() -> dict:
 
 
 def plot_tolerance(study: dict, path) -> None:
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, (ax_path, ax_bar, ax_pin) = plt.subplots(1, 3, figsize=(15, 4.8))
     nominal = TakeupParams()

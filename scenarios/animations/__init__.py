@@ -66,10 +66,10 @@ def can_animate(scenario) -> bool:
 
 def animate(result, path: Path) -> Animation:
     """Write the GIF of a run of an animated analysis; return where its drawing lies."""
-    import matplotlib
-    from PIL import Image
+    import matplotlib  # matplotlib: only when drawing
+    from PIL import Image  # pillow: only when animating
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     kind = result.scenario.analysis
     drawing = analyses.mechanism(kind).animation if kind else None

@@ -35,7 +35,7 @@ class Scene:
 
     def draw(self, ax, i: int) -> tuple[float, float]:
         ax.plot(self.xlim, [0.0, 0.0], color="0.6", lw=2)                      # the guide rail
-        from matplotlib.patches import Rectangle
+        from matplotlib.patches import Rectangle  # matplotlib: only when drawing
         w, h = TABLE
         ax.add_patch(Rectangle((self.x[i] - w / 2, 0.0), w, h, facecolor="#4477aa",
                                edgecolor="0.2"))

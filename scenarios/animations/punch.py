@@ -80,7 +80,7 @@ class Scene:
 
 
 def _rect(x, y, w, h, color):
-    from matplotlib.patches import Rectangle
+    from matplotlib.patches import Rectangle  # matplotlib: only when drawing
     return Rectangle((x, y), w, h, facecolor=color, edgecolor="0.2", lw=0.6)
 
 

@@ -2,7 +2,7 @@
 raises (sewfmu's own, whatever FMI version or library made the call), the log callback that keeps
 the FMUs' messages for error reports, and the variable types in FMI 2.0's words.
 
-The run loop (scenarios/master.py) turns a FmiCallError into the CosimError a user reads: the
+The run loop (scenarios/cosim/master.py) turns a FmiCallError into the CosimError a user reads: the
 instance, the phase, the time and the FMU's own last error message.
 """
 from __future__ import annotations
@@ -74,7 +74,7 @@ class LogCollector:
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
         try:
-            from fmpy.logging import addLoggerProxy
+            from fmpy.logging import addLoggerProxy  # fmpy: only when an FMU file is read
             addLoggerProxy(ctypes.byref(self.callbacks))
         except Exception:        # without the proxy, messages arrive unformatted: still useful
             pass

@@ -63,7 +63,7 @@ def content_hash(path: Path) -> str:
 
 def extract_cached(path: Path) -> str:
     """The folder the FMU file is extracted in: from the cache, or extracted into it now."""
-    from fmpy import extract
+    from fmpy import extract  # fmpy: only when an FMU file is read
 
     root = cache_root()
     if root is None:

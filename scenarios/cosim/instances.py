@@ -23,7 +23,7 @@ from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 from sewfmu.scenarios.cosim.fmi_calls import FmiCallError, LogCollector, Status, failed, kind_of
 from sewfmu.scenarios.cosim.fmu_cache import extract_cached, is_cached
 from sewfmu.scenarios.cosim.pythonfmu_host import instantiating, release_at_exit
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Instance.release), so it is loaded from one place only.
@@ -31,7 +31,7 @@ _EXTRACTED: dict[tuple, tuple[str, object]] = {}
 
 
 def extracted_fmu(path: Path) -> tuple[str, object]:
-    """(unzip folder, model description) of an FMU file, extracted once (scenarios/fmu_cache.py:
+    """(unzip folder, model description) of an FMU file, extracted once (scenarios/cosim/fmu_cache.py:
     kept between processes too)."""
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)

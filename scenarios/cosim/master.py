@@ -1,14 +1,13 @@
 """The run loop: one scenario stepped to its end by its algorithm, as libcosim splits a run into
 execution, algorithm and observer.
 
-- the instances: scenarios/instances.py (one adapter per FMI version), connected and checked by
-  scenarios/system.py;
-- the algorithm: how one communication step exchanges and steps (scenarios/algorithm.py; Jacobi
-  and Gauss–Seidel in fixed_step.py, iterative in coupling.py, adaptive in adaptive.py, by name in
-  masters.py), with its typed settings;
+- the instances: cosim/instances.py (one adapter per FMI version), connected and checked by
+  cosim/system.py;
+- the algorithm: how one communication step exchanges and steps (cosim/algorithms/: the
+  interface base.py, one module per master, the names in its __init__), with its typed settings;
 - this loop: loading and initializing the instances in dependency order, the clock (whole even
-  steps, or the steps a variable-step algorithm takes), one recorder (scenarios/recorder.py), one
-  rollback (scenarios/rollback.py), progress, Ctrl-C, failure reports naming the FMU, the time and
+  steps, or the steps a variable-step algorithm takes), one recorder (cosim/recorder.py), one
+  rollback (cosim/rollback.py), progress, Ctrl-C, failure reports naming the FMU, the time and
   its log, and freeing every instance whatever happens.
 """
 from __future__ import annotations
@@ -29,7 +28,8 @@ from sewfmu.scenarios.cosim.instances import open_instance
 from sewfmu.scenarios.cosim.recorder import Recorder
 from sewfmu.scenarios.cosim.rollback import Rollback
 from sewfmu.scenarios.cosim.system import System
-from sewfmu.scenarios.format.scenario import Scenario, ScenarioError
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError
 
 MAX_STEPS = 10**9
 

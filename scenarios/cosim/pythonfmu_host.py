@@ -31,7 +31,7 @@ def release_at_exit(fmu) -> None:
 
 @atexit.register
 def _release_libraries() -> None:
-    from fmpy import freeLibrary
+    from fmpy import freeLibrary  # fmpy: only when an FMU file is read
 
     while _LIBRARIES:
         library = _LIBRARIES.pop()
@@ -47,7 +47,7 @@ def _release_libraries() -> None:
 @contextlib.contextmanager
 def instantiating(keep_bytecode: bool = False):
     """Around an instantiation: whatever it does to sys.path is undone (see above); with
-    `keep_bytecode` (an FMU extracted into sewfmu's cache, scenarios/fmu_cache.py) the code it
+    `keep_bytecode` (an FMU extracted into sewfmu's cache, scenarios/cosim/fmu_cache.py) the code it
     imports leaves its bytecode there even where PYTHONDONTWRITEBYTECODE is set, so that the next
     run, in any process, does not compile it again."""
     saved, writes = list(sys.path), sys.dont_write_bytecode

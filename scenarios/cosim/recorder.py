@@ -12,7 +12,7 @@ import os
 
 import numpy as np
 
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 
 # the records of one run may take this share of the memory available when it starts, and
 # never more than RECORD_BUDGET (records beyond it are for a file, not for memory)

@@ -115,7 +115,7 @@ def check_parameters(scenario: Scenario, descriptions: dict) -> None:
 
 def _unit_hint(unit: str | None, value: float) -> str:
     """How a value out of range may have been meant: with the unit users think in."""
-    from sewfmu.components.units import DISPLAY_UNITS
+    from sewfmu.components.units import DISPLAY_UNITS  # loaded on first use (start-up time)
 
     displays = list(DISPLAY_UNITS.get(unit or "", {}))
     return (f" (meant in {displays[0]}? give the unit: \"{value:g} {displays[0]}\")"

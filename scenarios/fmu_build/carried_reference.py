@@ -5,7 +5,7 @@ the FMU's DefaultExperiment and compare (`sewfmu references --fmu X.fmu` does).
 
 `sewfmu build` writes it: the slave class is run here, in the builder's process, through the
 same Python methods the FMU's binary calls (exitInitializationMode, doStep, the getters), from
-the start values, at the DefaultExperiment's step. Built, not copied into FMUs (components/build.py
+the start values, at the DefaultExperiment's step. Built, not copied into FMUs (scenarios/fmu_build/build.py
 leaves this module out).
 """
 from __future__ import annotations

@@ -2,7 +2,7 @@
 the provenance in summary.json, a sweep point's identity and sewfmu's SSP annotation all read
 their keys here, so that a key added once is known everywhere (docs/scenarios.md lists them).
 
-Each key is an attribute of the same name on a Scenario (scenarios/format.py).
+Each key is an attribute of the same name on a Scenario (scenarios/format/scenario.py).
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Where scenarios come from: the catalogue that ships with sewfmu (catalogue/*.toml), a TOML
-file (scenarios/format.py reads it), or an SSP system (scenarios/ssp_import.py)."""
+file (scenarios/format/scenario.py reads it), or an SSP system (scenarios/format/ssp_import.py)."""
 from __future__ import annotations
 
 import codecs
@@ -9,7 +9,8 @@ from importlib import resources
 from pathlib import Path
 
 from sewfmu.components.parameters import did_you_mean
-from sewfmu.scenarios.format.scenario import Scenario, from_dict
+from sewfmu.scenarios.format.parse import from_dict
+from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.ssp_import import load_ssp
 from sewfmu.scenarios.format.values import ScenarioError
 

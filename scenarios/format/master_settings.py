@@ -1,7 +1,7 @@
 """Each master's settings, typed: the keys it reads from [experiment] besides the step, with their
 defaults and the ranges it honours. The scenario format validates a file's values here, the
 provenance and sewfmu's SSP annotation write what the master used (dataclasses.asdict), and the
-algorithm (scenarios/fixed_step.py, coupling.py, adaptive.py) reads them.
+algorithm (scenarios/cosim/algorithms/) reads them.
 
 This module imports nothing of sewfmu's, so that the format and the algorithms can both use it.
 """

@@ -1,38 +1,6 @@
-"""The scenario file: a small TOML that names FMU instances, connections and the experiment.
-
-    description = "..."
-    analysis = "punch"                      # key figures and plots: scenarios/analyses/punch.py
-    roles = { punch = "ram" }               # optional: which instance plays which of the
-                                            # analysis's roles (others are found by FMU type)
-    connections = ["shaft.phi -> linkage.phi", ...]
-    record = ["punch.y", ...]               # optional; default: every output
-
-    [experiment]
-    revolutions = 10                        # or stop_time = 0.5 (s)
-    shaft = "shaft"                         # optional: the MainShaft instance whose turns are
-                                            # counted (default: the analysis's shaft)
-    step = 2.5e-4                           # communication step (s)
-    master = "jacobi"                       # or "gauss-seidel", "iterative", "adaptive"
-    tolerance = 1e-5                        # iterative (default 1e-6), adaptive (1e-5)
-    acceleration = "aitken"                 # iterative: or "iqn-ils", "none"
-    record_every = 1                        # optional: keep every n-th point (long runs)
-    fmi = 2                                 # optional: run sewfmu's FMI 3.0 FMUs with 3
-
-    [instances.shaft]
-    fmu = "MainShaft"
-    parameters = { omega0 = 100.0 }
-
-    [compare]                               # optional: overlaid runs
-    parameter = "shaft.omega0"
-    values = [100.0, 200.0, 300.0]
-
-    [sweep.grid]                            # optional: `sewfmu sweep` (or [[sweep.points]])
-    "shaft.omega0" = [100.0, 200.0, 300.0]
-    "punch.F30" = [0.0, 5.0, 10.0]
-
-Every key, with its meaning, default and an example: docs/scenarios.md (the experiment's keys:
-scenarios/experiment.py). Every mistake is a ScenarioError that names the file and the key.
-"""
+"""A scenario: FMU instances with their parameters, the connections between them, what to record,
+and the experiment with its clock (end time, even steps, the last revolution). A TOML file
+becomes one through format/parse.py; the file's keys are docs/scenarios.md's."""
 from __future__ import annotations
 
 import copy
@@ -48,8 +16,6 @@ from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import (
     ScenarioError,
-    check_instance_name,
-    label_of,
     positive,
     seconds,
     short,
@@ -97,11 +63,11 @@ class Scenario:
     acceleration: str = "aitken"                          # iterative master
     fmi: int = 2                      # the FMI version of sewfmu's FMUs it runs (2 or 3)
     digest: str = ""                  # sha256 of the scenario file's text, as read
-    # FMU type -> file, for a system read from SSP (scenarios/ssp_import.py): its own FMUs
+    # FMU type -> file, for a system read from SSP (scenarios/format/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
 
     def settings(self):
-        """The typed settings of its master (scenarios/algorithm_settings.py): the file's
+        """The typed settings of its master (scenarios/format/master_settings.py): the file's
         tolerance and acceleration where given, else the master's defaults. A scenario file's
         tolerance belongs to the file's master: run with another master, that master's default
         applies."""
@@ -126,8 +92,11 @@ class Scenario:
         experiment.revolutions with its parameters (its speed ramp included)."""
         if self.stop_time is not None:
             return self.stop_time
-        from sewfmu.components.parameters import ParameterError, with_values
-        from sewfmu.components.shaft import MainShaft, ShaftParams
+        from sewfmu.components.parameters import (  # loaded on first use (start-up time)
+            ParameterError,
+            with_values,
+        )
+        from sewfmu.components.shaft import MainShaft, ShaftParams  # loaded on first use (start-up time)
 
         if self.shaft is None:        # revolutions set later (--set)
             self.shaft = self.default_shaft()
@@ -155,8 +124,11 @@ class Scenario:
         """The time the last whole revolution of the counted shaft begins (None where the
         scenario has no MainShaft to count): from there on every step is recorded, whatever
         experiment.record_every thins out before, so that the key figures never depend on it."""
-        from sewfmu.components.parameters import ParameterError, with_values
-        from sewfmu.components.shaft import MainShaft, ShaftParams
+        from sewfmu.components.parameters import (  # loaded on first use (start-up time)
+            ParameterError,
+            with_values,
+        )
+        from sewfmu.components.shaft import MainShaft, ShaftParams  # loaded on first use (start-up time)
 
         shaft = self.shaft or self.default_shaft()
         if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
@@ -209,7 +181,7 @@ class Scenario:
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
-        from sewfmu.components.units import UnitError, in_unit
+        from sewfmu.components.units import UnitError, in_unit  # loaded on first use (start-up time)
 
         fmu = self.instances[inst].fmu
         units = (_declared_units(self.fmu_files[fmu]) if fmu in self.fmu_files
@@ -268,208 +240,8 @@ class Scenario:
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:
     """name -> unit of the parameters and inputs of an FMU file (from another tool)."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     md = read_model_description(str(fmu_file))
     return {v.name: v.unit or "" for v in md.modelVariables
             if v.causality in ("parameter", "input")}
-
-
-def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
-    value = data.get(key)
-    if value is None:
-        if required:
-            raise ScenarioError(f"{where}: missing [{key}]")
-        return {}
-    if not isinstance(value, dict):
-        raise ScenarioError(f"{where}: {key} must be a table")
-    return value
-
-
-# the keys of a scenario file besides the experiment's (docs/scenarios.md describes each)
-TOP_KEYS = ("description", "analysis", "roles", "connections", "record", "experiment",
-            "instances", "compare", "sweep")
-INSTANCE_KEYS = ("fmu", "parameters")
-COMPARE_KEYS = ("parameter", "values")
-SWEEP_KEYS = ("grid", "points")
-
-
-def from_dict(data: dict, name: str, source: str) -> Scenario:
-    known_top = TOP_KEYS
-    for key in data:
-        if key not in known_top:
-            raise ScenarioError(f"{source}: unknown key {key!r}{did_you_mean(key, known_top)} "
-                                f"(known: {', '.join(sorted(known_top))})")
-    exp = _table(data, "experiment", source)
-    known_exp = EXPERIMENT_KEYS
-    for key in exp:
-        if key not in known_exp:
-            raise ScenarioError(f"{source}: unknown key experiment.{key}"
-                                f"{did_you_mean(key, known_exp)} "
-                                f"(known: {', '.join(sorted(known_exp))})")
-    if ("revolutions" in exp) == ("stop_time" in exp):
-        raise ScenarioError(f"{source}: [experiment] needs exactly one of revolutions, stop_time")
-    master = exp.get("master", "jacobi")
-    if master not in MASTER_NAMES:
-        raise ScenarioError(f"{source}: experiment.master must be one of {MASTER_NAMES}, got {master!r}")
-    if "step" not in exp:
-        raise ScenarioError(f"{source}: missing experiment.step")
-
-    if not isinstance(data.get("description", ""), str):
-        raise ScenarioError(f"{source}: description must be a string")
-    if "shaft" in exp and "stop_time" in exp:
-        raise ScenarioError(f"{source}: experiment.shaft names the shaft whose revolutions are "
-                            f"counted; with stop_time it has no use: remove one of them")
-    instances = {}
-    for inst_name, spec in _table(data, "instances", source).items():
-        where = f"{source}: instances.{inst_name}"
-        try:
-            check_instance_name(inst_name)
-        except ValueError as err:
-            raise ScenarioError(f"{where}: {err}") from None
-        if not isinstance(spec, dict) or not isinstance(spec.get("fmu"), str):
-            raise ScenarioError(f"{where}: needs fmu = \"<FMU name>\"")
-        for key in spec:
-            if key not in INSTANCE_KEYS:
-                raise ScenarioError(f"{where}: unknown key {key!r}"
-                                    f"{did_you_mean(key, INSTANCE_KEYS)} (fmu, parameters)")
-        params = spec.get("parameters", {})
-        if not isinstance(params, dict):
-            raise ScenarioError(f"{where}.parameters must be a table")
-        if spec["fmu"] not in FMUS:
-            raise ScenarioError(f"{where}: unknown FMU {spec['fmu']!r}"
-                                f"{did_you_mean(spec['fmu'], FMUS)} (known: {', '.join(FMUS)})")
-        inst = Instance(inst_name, spec["fmu"], {})
-        instances[inst_name] = inst
-    scenario = Scenario(
-        name=name, source=source, description=str(data.get("description", "")),
-        analysis=data.get("analysis"), instances=instances, connections=[],
-        record=data.get("record"), step=seconds(exp["step"], f"{source}: experiment.step"),
-        master=master,
-        stop_time=(seconds(exp["stop_time"], f"{source}: experiment.stop_time")
-                   if "stop_time" in exp else None),
-        revolutions=(positive(exp["revolutions"], f"{source}: experiment.revolutions")
-                     if "revolutions" in exp else None),
-        shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
-    for key in ("record_every", "tolerance", "acceleration", "fmi"):
-        if key in exp:
-            scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
-    if "tolerance" in exp:
-        scenario.tolerance_master = master
-    for inst_name, spec in data["instances"].items():
-        for key, value in spec.get("parameters", {}).items():
-            scenario.set_value(f"{inst_name}.{key}", value,
-                               origin=f"{source}: instances.{inst_name}.parameters")
-    scenario.roles = _bind_roles(data, instances, source)
-    if scenario.revolutions is not None:
-        if scenario.shaft is None:
-            scenario.shaft = scenario.default_shaft()
-        if scenario.shaft not in instances:
-            raise ScenarioError(f"{source}: experiment.shaft must name the MainShaft instance "
-                                f"whose revolutions are counted, got {scenario.shaft!r}")
-        if instances[scenario.shaft].fmu != "MainShaft":
-            raise ScenarioError(f"{source}: experiment.shaft names {scenario.shaft!r}, an instance "
-                                f"of {instances[scenario.shaft].fmu}: revolutions are counted on a "
-                                f"MainShaft instance")
-    connections = data.get("connections", [])
-    if not isinstance(connections, list):
-        raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
-    scenario.connections = [_parse_connection(text, instances, source) for text in connections]
-    check_one_source(scenario.connections, source)
-    _check_record(scenario.record, source)
-    if scenario.compare is not None:
-        _check_compare(scenario, source)
-    if scenario.sweep is not None:
-        _check_sweep(scenario.sweep, source)
-    return scenario
-
-
-def check_one_source(connections: list[Connection], source: str) -> None:
-    """FMI inputs take one value: a second source into an input would silently win."""
-    sources: dict[tuple[str, str], Connection] = {}
-    for con in connections:
-        other = sources.get((con.dst, con.dst_var))
-        if other is not None:
-            raise ScenarioError(f"{source}: connections: input {con.dst}.{con.dst_var} has two "
-                                f"sources, {other.src}.{other.src_var} and "
-                                f"{con.src}.{con.src_var}; an input takes one")
-        sources[(con.dst, con.dst_var)] = con
-
-
-def _check_record(record: Any, source: str) -> None:
-    if record is None:
-        return
-    if not isinstance(record, list) or not all(isinstance(r, str) for r in record):
-        raise ScenarioError(f"{source}: record must be a list of \"instance.variable\" strings")
-    twice = sorted({r for r in record if record.count(r) > 1})
-    if twice:
-        raise ScenarioError(f"{source}: record lists {twice[0]!r} more than once")
-
-
-def _check_compare(scenario: Scenario, source: str) -> None:
-    """[compare] parameter = "instance.parameter" (or "experiment.key"), values = [distinct]."""
-    cmp = scenario.compare
-    if not isinstance(cmp, dict) or not isinstance(cmp.get("parameter"), str) \
-            or not isinstance(cmp.get("values"), list) or not cmp["values"]:
-        raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
-                            f"a non-empty list values = [...]")
-    unknown = set(cmp) - set(COMPARE_KEYS)
-    if unknown:
-        raise ScenarioError(f"{source}: unknown key compare.{sorted(unknown)[0]} "
-                            f"(known: parameter, values)")
-    labels = [label_of(cmp["parameter"], v) for v in cmp["values"]]
-    twice = sorted({label for label in labels if labels.count(label) > 1})
-    if twice:
-        raise ScenarioError(f"{source}: compare.values gives {twice[0]} more than once")
-    probe = scenario.copy()
-    for value in cmp["values"]:
-        probe.set_value(cmp["parameter"], value, origin=f"{source}: compare")
-
-
-def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict[str, str]:
-    """The analysis's roles bound to instances (see scenarios/analyses), or {} without one."""
-    from sewfmu.scenarios.analyses import RoleError, bind
-
-    analysis, given = data.get("analysis"), data.get("roles", {})
-    if analysis is None:
-        if given:
-            raise ScenarioError(f"{source}: roles without an analysis")
-        return {}
-    if not isinstance(analysis, str):
-        raise ScenarioError(f"{source}: analysis must be a name, got {analysis!r}")
-    if not isinstance(given, dict) or not all(isinstance(v, str) for v in given.values()):
-        raise ScenarioError(f"{source}: roles must be a table of role = \"instance\"")
-    try:
-        return bind(analysis, {name: inst.fmu for name, inst in instances.items()}, given)
-    except RoleError as err:
-        raise ScenarioError(f"{source}: {err}") from None
-
-
-def _check_sweep(sweep: Any, source: str) -> None:
-    """[sweep] grid = { "instance.parameter" = [values] }, or [[sweep.points]] tables."""
-    if not isinstance(sweep, dict) or set(sweep) - set(SWEEP_KEYS):
-        raise ScenarioError(f"{source}: [sweep] takes grid = {{ \"instance.parameter\" = [...] }} "
-                            f"or [[sweep.points]]")
-    grid = sweep.get("grid", {})
-    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
-        raise ScenarioError(f"{source}: sweep.grid: each parameter needs a non-empty list of values")
-    points = sweep.get("points", [])
-    if not isinstance(points, list) or not all(isinstance(p, dict) and p for p in points):
-        raise ScenarioError(f"{source}: sweep.points must be tables of instance.parameter = value")
-
-
-def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
-    where = f"{source}: connection {text!r}"
-    if not isinstance(text, str) or "->" not in text:
-        raise ScenarioError(f"{where}: expected \"instance.output -> instance.input\"")
-    left, right = (part.strip() for part in text.split("->", 1))
-    ends = []
-    for end in (left, right):
-        inst, dot, var = end.partition(".")
-        if not dot or not var:
-            raise ScenarioError(f"{where}: {end!r} is not instance.variable")
-        if inst not in instances:
-            raise ScenarioError(f"{where}: unknown instance {inst!r}"
-                                f"{did_you_mean(inst, instances)}")
-        ends.append((inst, var))
-    return Connection(ends[0][0], ends[0][1], ends[1][0], ends[1][1])

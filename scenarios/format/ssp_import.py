@@ -28,7 +28,8 @@ from xml.etree import ElementTree as ET
 from sewfmu.scenarios.files.outputs import alive
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES
-from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario, check_one_source
+from sewfmu.scenarios.format.parse import check_one_source
+from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
 from sewfmu.scenarios.format.values import ScenarioError, check_instance_name
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -204,7 +205,7 @@ def _xml(file: Path, where: Path) -> ET.Element:
 
 def _fmu_type(fmu: Path, files: dict[str, Path], where: str, component: str) -> str:
     """The FMU's modelName (made unique if two different files share one)."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     try:
         name = read_model_description(str(fmu)).modelName
@@ -291,7 +292,7 @@ def _stop_time(root: ET.Element, where: str) -> float:
 
 
 def _experiment(root: ET.Element) -> dict:
-    """The experiment keys sewfmu's annotation carries (scenarios/experiment.py: step, master,
+    """The experiment keys sewfmu's annotation carries (scenarios/format/experiment.py: step, master,
     tolerance, acceleration); where the file gives no step, 0 (the run then asks for --set
     experiment.step). A value that is not valid is left at its default."""
     found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken"}
@@ -312,7 +313,7 @@ def _experiment(root: ET.Element) -> dict:
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
     """The analysis whose roles the components' FMU types fill, if one does."""
-    from sewfmu.scenarios.analyses import RoleError, bind, mechanisms
+    from sewfmu.scenarios.analyses import RoleError, bind, mechanisms  # loaded on first use (start-up time)
 
     for analysis in mechanisms():
         try:

@@ -1,6 +1,6 @@
 """The values a scenario is written with: the error every mistake raises, instance names
 checked, numbers and times read (a time may carry its unit), --set values parsed, labels and
-"did you mean" hints. The scenario format (scenarios/format.py) and everything that reads
+"did you mean" hints. The scenario format (scenarios/format/scenario.py) and everything that reads
 scenarios use these.
 """
 from __future__ import annotations
@@ -55,7 +55,7 @@ def positive(value: Any, where: str) -> float:
 def seconds(value: Any, where: str) -> float:
     """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
     if isinstance(value, str):
-        from sewfmu.components.units import UnitError, in_unit
+        from sewfmu.components.units import UnitError, in_unit  # loaded on first use (start-up time)
         try:
             value = in_unit(value, "s")
         except UnitError as err:

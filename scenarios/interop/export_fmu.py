@@ -34,9 +34,13 @@ _FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
 def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
                fmi: int = 2) -> Path:
     """Write the scenario as one co-simulation FMU (FMI 2.0, or 3.0) to `output`."""
-    from fmpy import read_model_description
-    from fmpy.container_fmu.cli import create_container_fmu
-    from fmpy.container_fmu.config import Component, Configuration, Connection
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
+    from fmpy.container_fmu.cli import create_container_fmu  # fmpy: only when an FMU file is read
+    from fmpy.container_fmu.config import (  # fmpy: only when an FMU file is read
+        Component,
+        Configuration,
+        Connection,
+    )
 
     output = _checked_output(Path(output))
     if scenario.master not in FIXED_STEP:
@@ -84,7 +88,7 @@ def _checked_output(output: Path) -> Path:
 def _exposed(scenario: Scenario, components: dict, variables: dict, fmi: int):
     """The container's variables (besides time) and what each maps to: every parameter of every
     instance, every input no connection sets, and the recorded outputs."""
-    from fmpy.model_description import ModelVariable
+    from fmpy.model_description import ModelVariable  # fmpy: only when an FMU file is read
 
     exposed, mappings = [], {}
 
@@ -140,7 +144,7 @@ def _description(scenario: Scenario, fmi: int, stop: float, step: float, exposed
         ModelDescription,
         ModelVariable,
         Unknown,
-    )
+    )  # fmpy: only when an FMU file is read
 
     # the container's value reference 0 is the time; FMI 2.0 has no independent variable in
     # co-simulation (and FMI Library refuses one without a start), so there it is a local

@@ -9,11 +9,14 @@ RunResult, so `sewfmu crosscheck` summarizes it exactly like sewfmu's own run.
 """
 from __future__ import annotations
 
+import ctypes
+import importlib.util
 import json
 import os
 import re
 import subprocess
 import sys
+import sysconfig
 import time
 from pathlib import Path
 
@@ -27,17 +30,17 @@ class HostError(RuntimeError):
 
 
 def _run_libcosim(ssp: str, step: float, stop: float, record: list[str]):
-    from libcosimpy.CosimEnums import CosimVariableType
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimEnums import CosimVariableType  # optional extra (interop)
+    from libcosimpy.CosimExecution import CosimExecution  # optional extra (interop)
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level  # optional extra (interop)
+    from libcosimpy.CosimObserver import CosimObserver  # optional extra (interop)
 
     log_output_level(CosimLogLevel.WARNING)
     step_ns = round(step * 1e9)            # libcosim counts time in whole nanoseconds
     try:
         execution = CosimExecution.from_ssp_file(ssp, step_size=step_ns)
     except AssertionError:          # libcosimpy asserts; libcosim's own message says why
-        from libcosimpy._internal import get_last_error_message
+        from libcosimpy._internal import get_last_error_message  # optional extra (interop)
         raise HostError(f"libcosim could not load the system: {get_last_error_message()}") \
             from None
     observer = CosimObserver.create_last_value()
@@ -78,7 +81,6 @@ def _refuse_non_finite(row: list[float], record: list[str], host: str) -> None:
 def _load_tbb() -> None:
     """ecospy's library needs libtbb.so.12: the `tbb` wheel (interop extra) puts it in the
     environment's lib/, which is not on the loader's path; load it globally first."""
-    import ctypes
     tbb = Path(sys.prefix) / "lib" / "libtbb.so.12"
     if not tbb.exists():
         raise HostError(f"ecos needs libtbb.so.12; not found at {tbb}: pip install -e '.[interop]'")
@@ -86,10 +88,10 @@ def _load_tbb() -> None:
 
 
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
-    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET
+    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
     _load_tbb()
-    from ecospy import EcosSimulation
+    from ecospy import EcosSimulation  # optional extra (interop)
 
     sim = EcosSimulation(step_size=step, ssp_path=ssp)
     sim.init(parameter_set=PARAMETER_SET)     # ecos applies a parameter set only when named
@@ -110,8 +112,6 @@ def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
 # --- ecos out of process: the `ecos` command-line tool, a host that is not Python ------------
 def ecos_binary(name: str = "ecos") -> Path:
     """ecospy's `ecos` or `proxyfmu` binary, with its run bit set (the wheel ships it without)."""
-    import importlib.util
-
     spec = importlib.util.find_spec("ecospy")
     if spec is None or not spec.submodule_search_locations:
         raise HostError("ecospy is not installed: pip install -e '.[interop]'")
@@ -128,8 +128,6 @@ def host_environment() -> dict[str, str]:
     is not linked to libpython, so the Python library must be preloaded, and the embedded
     interpreter must find its standard library (PYTHONHOME); the FMUs import nothing else (they
     carry their own code and pythonfmu's). LD_LIBRARY_PATH lets ecos find libtbb.so.12."""
-    import sysconfig
-
     libdir, library = sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LDLIBRARY")
     return {"LD_PRELOAD": os.path.join(libdir or "", library or ""),
             "PYTHONHOME": sys.base_prefix,
@@ -175,7 +173,7 @@ def check_host_environment(env: dict[str, str]) -> list[str]:
 
 def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout: float = 600.0):
     """Run the .ssp with the `ecos` command-line tool; return (time, columns, wall)."""
-    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET
+    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
     env = {**os.environ, **host_environment()}
     problems = check_host_environment(env)

@@ -100,7 +100,7 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     experiment = ET.SubElement(root, _q(SSD, "DefaultExperiment"),
                                {"startTime": "0", "stopTime": repr(scenario.end_time())})
     # the communication step is not part of SSP 1.0: sewfmu's annotation carries it, and
-    # scenarios/ssp_import.py reads it back
+    # scenarios/format/ssp_import.py reads it back
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
     settings = ssp_settings(scenario, step)

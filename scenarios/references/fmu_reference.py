@@ -6,7 +6,7 @@ Two layouts are read and written:
   `<Model>/<Model>_ref.csv` (time and the outputs), `<Model>_ref.opt` (StartTime, StopTime,
   StepSize, RelTol) and `<Model>_in.csv` (the inputs over time) where the run had inputs;
 - fmi-ls-ref, inside the FMU (as the Modelica Reference-FMUs carry it): a manifest naming the
-  CSV output of the FMU's default experiment (components/carried_reference.py writes it for
+  CSV output of the FMU's default experiment (scenarios/fmu_build/carried_reference.py writes it for
   sewfmu's FMUs).
 
 A check runs the FMU as the reference was made (its time grid, its inputs) and compares every
@@ -146,7 +146,7 @@ def read_cross_check(refs: Path, model: str) -> Reference | None:
 def read_carried(fmu: Path) -> Reference | None:
     """The reference an FMU carries (fmi-ls-ref), run as its default experiment; None if it
     carries none."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     with zipfile.ZipFile(fmu) as archive:
         if MANIFEST not in archive.namelist():
@@ -176,10 +176,10 @@ def _grid_step(times: np.ndarray) -> float:
 def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = None) -> dict:
     """The FMU run as the experiment says: {"time": ..., variable: ...}. The instance is made
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
-    from fmpy import simulate_fmu
+    from fmpy import simulate_fmu  # fmpy: only when an FMU file is read
 
-    from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status
-    from sewfmu.scenarios.cosim.instances import open_instance
+    from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.instances import open_instance  # loaded on first use (start-up time)
 
     log = LogCollector()
     instance = open_instance("reference", Path(fmu), log)
@@ -247,7 +247,7 @@ def check(fmu: Path, reference: Reference, rtol: float | None = None,
 # --- recording --------------------------------------------------------------------------------
 def default_experiment(fmu: Path) -> Experiment:
     """The FMU's DefaultExperiment (a step of a 500th of the run where it gives none)."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     md = read_model_description(str(fmu), validate=False)
     default = md.defaultExperiment
@@ -271,7 +271,7 @@ def record(fmu: Path, refs: Path, experiment: Experiment | None = None,
            model: str | None = None) -> Path:
     """Run the FMU (its DefaultExperiment, or `experiment`) and write its reference into
     refs/<Model>/ in the Cross-Check layout."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     model = model or read_model_description(str(fmu), validate=False).modelName
     experiment = experiment or default_experiment(fmu)
@@ -291,9 +291,9 @@ def record(fmu: Path, refs: Path, experiment: Experiment | None = None,
 def plot(fmu_name: str, got: dict, reference: Reference, deviations: list[Deviation],
          path: Path) -> Path:
     """The deviating variables against their reference, and the differences."""
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     names = [d.variable for d in deviations if not d.why][:6]
     fig, axes = plt.subplots(len(names), 2, figsize=(10, 2.6 * len(names)), squeeze=False)

@@ -1,5 +1,5 @@
 """Which references an FMU is checked against, and the check: shared by `sewfmu references
---fmu` and the pytest fixture `fmu_reference` (sewfmu/pytest_plugin.py).
+--fmu` and the pytest fixture `fmu_reference` (scenarios/references/pytest_plugin.py).
 
 - with a references folder (`refs`): the reference recorded there for the FMU's model;
 - without: for one of sewfmu's own FMUs, the reference sewfmu ships (its regression case, the
@@ -37,7 +37,7 @@ def tolerance(value, name: str) -> float | None:
 
 def describe(fmu: Path):
     """The FMU's model description, or one line saying why the file is not an FMU."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     fmu = Path(fmu)
     if not fmu.is_file():

@@ -7,7 +7,7 @@ with the package (scenarios/references/regression_references/):
 
 Each is made with the FMU's default parameters, so that anyone can reproduce it (fmuCheck does,
 with the reference's input, step and stop time). Not to be confused with the monolithic solution
-of the punch drive (scenarios/punch_monolithic.py), against which the physics is checked.
+of the punch drive (scenarios/analyses/solutions/punch_monolithic.py), against which the physics is checked.
 
 Each FMU runs alone in fmpy's simulate_fmu, its inputs from _in.csv; its case (stop time, step,
 inputs) is declared by its mechanism's descriptor. The inputs are made from the

@@ -3,7 +3,7 @@
 A sweep is a list of points, each a set of `instance.parameter = value` (or `experiment.key`)
 overrides of one scenario: the Cartesian product of a grid, or an explicit list. Points run in
 worker *processes* (the FMUs' Python holds one interpreter lock, so threads would not help): a
-local pool (scenarios/workers.py) by default, Dask distributed when a scheduler address is given.
+local pool (scenarios/runs/workers.py) by default, Dask distributed when a scheduler address is given.
 
 Every finished point is appended at once, as one JSON line, to `points.jsonl` in the output
 folder. A point is identified by everything that decides its result: the scenario's content with
@@ -22,6 +22,7 @@ import itertools
 import json
 import os
 import sys
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,7 +53,7 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from sewfmu.scenarios.fmu_build.build import fmu_version
+    from sewfmu.scenarios.fmu_build.build import fmu_version  # loaded on first use (start-up time)
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
@@ -114,9 +115,9 @@ WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master
 
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
-    from sewfmu.scenarios.analyses import figures_of
-    from sewfmu.scenarios.runs.results import write_csv
-    from sewfmu.scenarios.runs.runner import simulate, summarize
+    from sewfmu.scenarios.analyses import figures_of  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.results import write_csv  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.runner import simulate, summarize  # loaded on first use (start-up time)
 
     row = {"index": point.index, "key": key, **dict(point.values)}
     try:
@@ -202,9 +203,9 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
               scheduler: str | None = None, keep_results: bool = False,
               progress: bool = True) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order."""
-    from sewfmu.scenarios.cosim.instances import extracted_fmu
-    from sewfmu.scenarios.cosim.system import check_parameters
-    from sewfmu.scenarios.fmu_build.build import fmus_for
+    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.system import check_parameters  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):
@@ -245,7 +246,7 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
     if not todo:
         return
     if scheduler:
-        from distributed import Client, as_completed
+        from distributed import Client, as_completed  # optional extra (dask)
         with Client(scheduler) as client:
             # the scenario goes to every worker once, not with every point; the points go in
             # batches, a few per worker slot, so that a point costs its run and not a task's
@@ -260,7 +261,7 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
             for future in as_completed(futures):
                 yield from future.result()
         return
-    from sewfmu.scenarios.runs.workers import run_tasks
+    from sewfmu.scenarios.runs.workers import run_tasks  # loaded on first use (start-up time)
 
     by_key = {keys[p.index]: p for p in todo}
     tasks = [(keys[p.index], run_point, (scenario, p, keys[p.index], results_dir)) for p in todo]
@@ -300,18 +301,16 @@ class _NoBar:
 def _progress(total: int, already: int, enabled: bool, name: str):
     if not enabled:
         return _NoBar()
-    from tqdm import tqdm
+    from tqdm import tqdm  # only when a bar is shown
     return tqdm(total=total, initial=already, desc=f"sweep {name}", unit="point")
 
 
 def plot_table(rows: list[dict], swept: list[str], figures: list[str], path: Path,
                title: str) -> None:
     """Each key figure against each swept parameter; one line per combination of the others."""
-    import textwrap
-
-    import matplotlib
+    import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     ok = [r for r in rows if r["status"] == "ok"]
     fig, axes = plt.subplots(len(figures), len(swept), figsize=(4.2 * len(swept),
@@ -347,13 +346,13 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
                    report: bool = False) -> None:
     """The plot of every key figure against the swept parameters (SCENARIO_sweep.png) and, with
     report, report.html beside sweep.csv."""
-    from sewfmu.scenarios import analyses
+    from sewfmu.scenarios import analyses  # loaded on first use (start-up time)
 
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
         figures = [f for f in analyses.mechanism(scenario.analysis).figures if f != "n_contacts"]
         plot_table(rows, swept, figures, picture, scenario.description)
     if report:
-        from sewfmu.scenarios.runs.report import sweep_report
+        from sewfmu.scenarios.runs.report import sweep_report  # loaded on first use (start-up time)
         sweep_report(out_dir / "report.html", scenario, rows, swept,
                      picture if scenario.analysis else None)

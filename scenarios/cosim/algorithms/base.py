@@ -1,9 +1,9 @@
-"""What a co-simulation algorithm is to the run loop (scenarios/master.py): how one communication
+"""What a co-simulation algorithm is to the run loop (scenarios/cosim/master.py): how one communication
 step exchanges and steps, behind a narrow interface, with its typed settings
-(scenarios/algorithm_settings.py). The loop owns everything else: the instances' life, the clock,
+(scenarios/format/master_settings.py). The loop owns everything else: the instances' life, the clock,
 the records, progress, interruption and failure reports.
 
-An algorithm sees the run's System (scenarios/system.py): `instances` in dependency order,
+An algorithm sees the run's System (scenarios/cosim/system.py): `instances` in dependency order,
 `in_loops` (those on a feedback loop) and `passes` (exchanges needed to settle them).
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import ClassVar
 class Algorithm:
     name: ClassVar[str]
     Settings: ClassVar[type]
-    # it takes steps again (with scenarios/rollback.py): the loop then tells the FMUs that
+    # it takes steps again (with scenarios/cosim/rollback.py): the loop then tells the FMUs that
     # their state may be set back (noSetFMUStatePriorToCurrentPoint = false)
     rolls_back: ClassVar[bool] = False
     # it sizes its own steps: the loop gives it the time left instead of a step

@@ -1,5 +1,5 @@
 """The fixed-step masters: Jacobi and Gauss–Seidel. They differ in how one communication step
-exchanges and steps; the run loop is scenarios/master.py's.
+exchanges and steps; the run loop is scenarios/cosim/master.py's.
 
 - Jacobi: every FMU steps from the values at t; then, in dependency order, each FMU's inputs are
   set from its sources' outputs at t + h (a direct-feedthrough FMU's outputs follow its new inputs
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from sewfmu.scenarios.cosim.algorithms.base import Algorithm
 from sewfmu.scenarios.format.master_settings import GaussSeidelSettings, JacobiSettings
-from sewfmu.scenarios.format.scenario import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError
 
 
 class Jacobi(Algorithm):
