@@ -10,8 +10,18 @@ internal (docs/architecture.md).
 """
 from sewfmu._version import __version__
 from sewfmu.api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
-from sewfmu.scenarios.cosim.divergence import Diverged
-from sewfmu.scenarios.cosim.fmi_calls import CosimError
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
            "Run", "Sweep", "Scenario", "ScenarioError", "CosimError", "Diverged"]
+
+
+def __getattr__(name: str):
+    """The run errors on first use: they live with the engine (fmpy), which `import sewfmu`
+    does not load, so that the command line answers Ctrl-C from its first tenth of a second."""
+    if name == "CosimError":
+        from sewfmu.scenarios.cosim.fmi_calls import CosimError  # the engine: on first use
+        return CosimError
+    if name == "Diverged":
+        from sewfmu.scenarios.cosim.divergence import Diverged  # the engine: on first use
+        return Diverged
+    raise AttributeError(f"module 'sewfmu' has no attribute {name!r}")
