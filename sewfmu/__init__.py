@@ -8,20 +8,37 @@ run, sweep, compare, load, build and show do what the command line's commands of
 do (docs/api.md). Public: this module and sewfmu.components (the models); sewfmu.scenarios is
 internal (docs/architecture.md).
 """
+import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first: see scenarios()
 from sewfmu._version import __version__
-from sewfmu.api import Run, Scenario, ScenarioError, Sweep, build, compare, load, run, scenarios, show, sweep
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
            "Run", "Sweep", "Scenario", "ScenarioError", "CosimError", "Diverged"]
 
+# every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
+# once and answers Ctrl-C from its first moment; name -> the module that defines it
+_HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "build", "show",
+                                            "Run", "Sweep", "Scenario", "ScenarioError")},
+         "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
+         "Diverged": "sewfmu.scenarios.cosim.divergence"}
+
+
+def scenarios() -> list[str]:
+    """The names of the catalogue's scenarios. (Defined here, after the package sewfmu.scenarios
+    was loaded: loading it later would put the module under this name.)"""
+    from sewfmu.api import scenarios as names  # the API on first use
+
+    return names()
+
 
 def __getattr__(name: str):
-    """The run errors on first use: they live with the engine (fmpy), which `import sewfmu`
-    does not load, so that the command line answers Ctrl-C from its first tenth of a second."""
-    if name == "CosimError":
-        from sewfmu.scenarios.cosim.fmi_calls import CosimError  # the engine: on first use
-        return CosimError
-    if name == "Diverged":
-        from sewfmu.scenarios.cosim.divergence import Diverged  # the engine: on first use
-        return Diverged
-    raise AttributeError(f"module 'sewfmu' has no attribute {name!r}")
+    if name not in _HOME:
+        raise AttributeError(f"module 'sewfmu' has no attribute {name!r}")
+    import importlib  # light, but only when a public name is first used
+
+    value = getattr(importlib.import_module(_HOME[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -8,6 +8,7 @@ import argparse
 import importlib
 import json
 import os
+import signal
 import sys
 import warnings
 from importlib import metadata
@@ -358,6 +359,8 @@ def main(argv=None) -> int:
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
     args = parser.parse_args(argv)
+    # from here a signal stops the command cleanly (the start-up's handlers: sewfmu/__main__.py)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()
     # a warning (an SSP input that nothing sets) is one line, as errors are
     warnings.showwarning = lambda message, *_, **__: print(f"sewfmu: warning: {message}",
