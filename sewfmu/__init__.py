@@ -12,12 +12,15 @@ import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first
 from sewfmu._version import __version__
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
-           "Run", "Sweep", "Scenario", "ScenarioError", "CosimError", "Diverged"]
+           "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
+           "Diverged"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
 _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "build", "show",
                                             "Run", "Sweep", "Scenario", "ScenarioError")},
+         "Error": "sewfmu.errors",
+         "OutputError": "sewfmu.scenarios.files.outputs",
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
          "Diverged": "sewfmu.scenarios.cosim.divergence"}
 

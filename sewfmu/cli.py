@@ -389,14 +389,9 @@ def main(argv=None) -> int:
 
 def explain(err: Exception, command: str) -> str:
     """An error as one line that says what was wrong and where."""
-    from sewfmu.scenarios.analyses import RoleError, RunTooShort  # loaded on first use (start-up time)
-    from sewfmu.scenarios.cosim.divergence import Diverged  # loaded on first use (start-up time)
-    from sewfmu.scenarios.cosim.fmi_calls import CosimError  # loaded on first use (start-up time)
-    from sewfmu.scenarios.files.outputs import OutputError  # loaded on first use (start-up time)
-    from sewfmu.scenarios.interop.hosts import HostError  # loaded on first use (start-up time)
+    from sewfmu.errors import Error  # light: the base of every refusal
 
-    if isinstance(err, (ScenarioError, CosimError, HostError, OutputError, RunTooShort,
-                        RoleError, Diverged)):
+    if isinstance(err, Error):
         return " ".join(str(err).split())
     if isinstance(err, ModuleNotFoundError) and err.name:
         extra = EXTRAS.get(err.name.split(".")[0])

@@ -22,6 +22,7 @@ from types import ModuleType
 from typing import Callable
 
 from sewfmu.components.parameters import did_you_mean
+from sewfmu.errors import Error
 
 
 @dataclass(frozen=True)
@@ -110,7 +111,7 @@ def studies() -> dict[str, tuple[str, Study]]:
             for name, study in m.studies.items()}
 
 
-class RoleError(ValueError):
+class RoleError(Error, ValueError):
     """An analysis that cannot be bound to a scenario's instances."""
 
 
@@ -160,7 +161,7 @@ def parameters(result, role: str) -> dict:
     return result.scenario.instances[result.scenario.roles[role]].parameters
 
 
-class RunTooShort(ValueError):
+class RunTooShort(Error, ValueError):
     """A run that does not hold one whole revolution of the shaft to read figures from."""
 
 

@@ -19,8 +19,10 @@ from __future__ import annotations
 
 import math
 
+from sewfmu.errors import Error
 
-class Diverged(RuntimeError):
+
+class Diverged(Error, RuntimeError):
     """The exchanged values of a feedback loop left their range or grew without bound."""
 
 

@@ -18,6 +18,8 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 
+from sewfmu.errors import Error
+
 
 class Status(IntEnum):
     """fmi2Status and fmi3Status: the same numbers (FMI 3.0 has no Pending)."""
@@ -48,7 +50,7 @@ class FmiCallError(RuntimeError):
         return self.status >= Status.FATAL
 
 
-class CosimError(RuntimeError):
+class CosimError(Error, RuntimeError):
     """An FMU failed during the run; the message names the instance, the time and its log."""
 
 

@@ -20,10 +20,12 @@ import re
 import shutil
 from pathlib import Path
 
+from sewfmu.errors import Error
+
 _DEBRIS = re.compile(r"^\..+\.(\d+)\.(tmp|partial)$")
 
 
-class OutputError(ValueError):
+class OutputError(Error, ValueError):
     """An output folder sewfmu will not write into, named with the reason."""
 
 

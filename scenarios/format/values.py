@@ -9,8 +9,10 @@ import math
 import tomllib
 from typing import Any
 
+from sewfmu.errors import Error
 
-class ScenarioError(ValueError):
+
+class ScenarioError(Error, ValueError):
     """A scenario that cannot run, with the file and key it comes from."""
 
 

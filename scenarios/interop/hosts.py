@@ -22,10 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from sewfmu.errors import Error
+
 HOSTS = ("libcosim", "ecos", "ecos-cli")
 
 
-class HostError(RuntimeError):
+class HostError(Error, RuntimeError):
     """The other host could not run the scenario."""
 
 
