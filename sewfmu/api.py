@@ -23,7 +23,8 @@ from sewfmu.scenarios.analyses import figure_units, figures_of
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.files.outputs import OutputError
+from sewfmu.scenarios.format.values import ScenarioError, plain
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
            "Scenario", "ScenarioError"]
@@ -112,6 +113,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     )
 
     sc = load(scenario, set)
+    out, fmu_dir = _folder(out, "out"), _folder(fmu_dir, "fmu_dir")
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
     bar = TerminalProgress(sc.name) if progress else None
@@ -121,7 +123,10 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
         if bar is not None:
             bar.close()
     if out is not None:
-        write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
+        try:
+            write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
+        except OSError as err:
+            raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
     out = Path(out) if out is not None else None
     each = {label: _run_of(label or sc.name, result, own, out) for label, result, own in runs}
     if not sc.compare:
@@ -199,16 +204,26 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     if grid is not None and not isinstance(grid, Mapping):
         raise ScenarioError(f"grid: expected a dict of 'instance.parameter': [values], got "
                             f"{type(grid).__name__}")
-    grid = {k: list(v) if isinstance(v, (list, tuple, range)) else [v]
-            for k, v in (grid or {}).items()}
+    grid = {str(k): _values_of(k, v) for k, v in (grid or {}).items()}
+    if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
+        raise ScenarioError(f"scheduler: expected a Dask scheduler's address such as "
+                            f"'tcp://127.0.0.1:8786', got {scheduler!r}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(plain(workers), int)
+                                or plain(workers) < 1):
+        raise ScenarioError(f"workers: expected a whole number >= 1, got {workers!r}")
+    out = _folder(out, "out")
     points = points_of(sc, grid)
     swept = [name for name, _ in points[0].values]
     if (plot or report) and out is None:
         raise ScenarioError("plot and report are files: give out= a folder for them")
     with tempfile.TemporaryDirectory(prefix="sewfmu_sweep_") as scratch:
         folder = Path(out) if out is not None else Path(scratch)
-        rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
-                         keep_results=results and out is not None, progress=progress)
+        try:
+            rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
+                             keep_results=results and out is not None, progress=progress)
+        except OSError as err:
+            raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
+                from None
         if rows and all(r["status"] != "ok" for r in rows):
             raise ScenarioError(f"every point of the sweep failed ({rows[0]['error']})"
                                 + (f"; see {folder}/sweep.csv" if out is not None else ""))
@@ -218,6 +233,32 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     units.update({"stop_time": "s", "wall_time_s": "s", **figure_units(sc.analysis)})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
+
+
+def _values_of(name, values) -> list:
+    """A grid's values as a list: a list, tuple, range, numpy array or any other iterable of
+    values, or one value; numpy numbers as Python numbers."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        values = [values]
+    values = [plain(v) for v in (values.tolist() if hasattr(values, "tolist") else values)]
+    if not values:
+        raise ScenarioError(f"grid: {name} has no values")
+    return values
+
+
+def _folder(value, name: str) -> Path | None:
+    """A folder argument (out=, fmu_dir=): None, or a path that can be one."""
+    if value is None:
+        return None
+    if not isinstance(value, (str, Path)):
+        raise ScenarioError(f"{name}: expected a folder path, got {type(value).__name__} "
+                            f"{value!r}")
+    if "\x00" in str(value) or not str(value):
+        raise ScenarioError(f"{name}: {str(value)!r} is not a path")
+    path = Path(value)
+    if path.exists() and not path.is_dir():
+        raise ScenarioError(f"{name}: {path} exists and is not a folder")
+    return path
 
 
 def _unit_of(sc: Scenario, target: str) -> str:
@@ -239,6 +280,10 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     from sewfmu.scenarios.runs.compare import compare as compare_rows  # loaded on first use (start-up time)
 
     sc = load(scenario, set)
+    rtol = plain(rtol)
+    if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, (int, float))
+                             or not 0.0 < rtol < 1.0):
+        raise ScenarioError(f"rtol: expected a relative tolerance between 0 and 1, got {rtol!r}")
     units = {**figure_units(sc.analysis), "wall_time_s": "s"}
     out = {}
     for row in compare_rows(sc, rtol=rtol):

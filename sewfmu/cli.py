@@ -249,8 +249,19 @@ def _fmt(value) -> str:
     return str(value)
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """A bad option is one line, as every other refusal (argparse would print its usage block);
+    `sewfmu COMMAND --help` shows the usage."""
+
+    def error(self, message: str):
+        command = self.prog.removeprefix("sewfmu").strip()
+        where = f"{command}: " if command else ""
+        self.exit(2, f"sewfmu: error: {where}{message} (`sewfmu {command + ' ' if command else ''}"
+                     f"--help` shows the options)\n")
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="sewfmu", description="Sewing-machine mechanisms as "
+    parser = _OneLineParser(prog="sewfmu", description="Sewing-machine mechanisms as "
                                      "FMI 2.0 and 3.0 co-simulation FMUs, and scenarios that connect them.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     parser.add_argument("--version", action="version", version=f"sewfmu {__version__}")

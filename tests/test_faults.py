@@ -342,20 +342,48 @@ def test_files_follow_the_umask(tmp_path, mask):
 def test_what_killed_runs_left_is_removed_by_the_next_run(tmp_path):
     dead = _dead_pid()
     out = tmp_path / "out"
-    staging = out / f".sewfmu.{dead}.partial"
+    staging = out / f".outputs.sewfmu-{dead}.partial"
     staging.mkdir(parents=True)
     (staging / "results.csv").write_bytes(b"0" * 100_000)
     sweep = tmp_path / "sweep"
     (sweep / "points" / "x").mkdir(parents=True)
-    torn = sweep / "points" / "x" / f".results.csv.{dead}.tmp"
+    torn = sweep / "points" / "x" / f".results.csv.sewfmu-{dead}.tmp"
     torn.write_bytes(b"1" * 100_000)
-    alive = out / f".sewfmu.{os.getppid()}.partial"           # a live process's: kept
+    alive = out / f".outputs.sewfmu-{os.getppid()}.partial"   # a live process's: kept
     alive.mkdir()
     assert main(["run", "punch_drive", "--set", "experiment.revolutions=1", "--out", str(out)]) == 0
     assert not staging.exists() and alive.exists()
     run_sweep(_scenario(), grid_points({"shaft.omega0": [100.0]}), sweep, workers=1,
               progress=False)
     assert not torn.exists()
+
+
+def test_temporaries_of_other_programs_and_notes_in_a_variant_folder_stay(tmp_path):
+    """Only sewfmu's own temporaries are debris; a rerun replaces the files it wrote, not a
+    variant folder with the user's notes in it."""
+    dead = _dead_pid()
+    out = tmp_path / "out"
+    assert main(["run", "punch_speed", "--set", "experiment.revolutions=1", "--out",
+                 str(out)]) == 0
+    variant = next(p for p in out.iterdir() if p.is_dir())
+    notes = variant / "notes.txt"
+    notes.write_text("mine")
+    other = out / f".editor.{dead}.tmp"                       # another program's, not ours
+    other.write_text("theirs")
+    assert main(["run", "punch_speed", "--set", "experiment.revolutions=1", "--out",
+                 str(out)]) == 0
+    assert notes.read_text() == "mine" and other.read_text() == "theirs"
+    assert (variant / "results.csv").exists()
+
+
+def test_sweep_points_that_differ_get_folders_of_their_own(tmp_path):
+    """100 and 100.0000001 are two points, two folders, two result files."""
+    sweep = tmp_path / "sweep"
+    rows = run_sweep(_scenario(), grid_points({"shaft.omega0": [100.0, 100.0000001]}), sweep,
+                     workers=1, progress=False, keep_results=True)
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    folders = sorted(p.name for p in (sweep / "points").iterdir() if p.is_dir())
+    assert folders == ["shaft.omega0=100", "shaft.omega0=100.0000001"]
 
 
 def test_a_users_own_files_in_the_output_folder_stay(tmp_path, monkeypatch):

@@ -31,7 +31,10 @@ from sewfmu.scenarios.cosim.system import System
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
-MAX_STEPS = 10**9
+# the most work a run may mean: communication steps × FMU instances (about 25 µs each on a PC:
+# 10^8 is some 40 minutes); beyond it a run is refused up front with its estimate
+MAX_FMU_STEPS = 10**8
+FMU_STEP_SECONDS = 25e-6
 
 
 @dataclass
@@ -135,11 +138,14 @@ class Master:
             raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
                                 f"run ({self.stop:g} s)")
         self.n_steps, self.h = sc.even_steps()
-        if self.n_steps > MAX_STEPS:
-            raise ScenarioError(f"{sc.source}: {self.n_steps:.3g} communication steps (end "
-                                f"{self.stop:g} s at a step of {sc.step:g} s) are more than "
-                                f"{MAX_STEPS:.0e}: days of stepping; take a longer "
-                                f"experiment.step or a shorter run")
+        work = self.n_steps * max(1, len(sc.instances))
+        if work > MAX_FMU_STEPS:
+            hours = work * FMU_STEP_SECONDS / 3600
+            raise ScenarioError(f"{sc.source}: {self.n_steps:.3g} communication steps of "
+                                f"{len(sc.instances)} FMUs (end {self.stop:g} s at a step of "
+                                f"{sc.step:g} s) are {work:.3g} FMU steps, about {hours:.3g} "
+                                f"hours of stepping, more than the {MAX_FMU_STEPS:.0e} a run "
+                                f"may take; take a longer experiment.step or a shorter run")
         # a setting the master cannot honour is refused here, before any FMU is loaded
         self.algorithm = algorithm = ALGORITHMS[sc.master](sc.settings())
         self.every = max(1, int(sc.record_every))
@@ -172,7 +178,11 @@ class Master:
             self.dense_k, self.dense_t = max(0, int(window / self.h) - 1), None
             rows = (self.n_steps // self.every + 1 + (self.n_steps % self.every != 0)
                     + max(0, self.n_steps - self.dense_k))
-        self.recorder = Recorder(system.columns, system.plan, rows, sc.source)
+        # kept at every step whatever record_every: the last revolution (for the advice)
+        last = sc.last_revolution_start()
+        dense = 0 if last is None else max(0, self.n_steps - int(last / self.h) + 1)
+        self.recorder = Recorder(system.columns, system.plan, rows, sc.source,
+                                 None if rows is None else (self.n_steps, self.every, dense))
         self.recorder.record(0.0)
         self._phase = "step"
 

@@ -37,17 +37,27 @@ def max_rows(columns: int) -> int:
     return int(_budget() / ((columns + 1) * 8))
 
 
-def check_memory(rows: int, columns: int, source: str, what: str = "records") -> None:
-    """Refuse, up front and with the numbers, a run whose records would not fit in memory."""
+def check_memory(rows: int, columns: int, source: str, what: str = "records",
+                 thinning: tuple[int, int, int] | None = None) -> None:
+    """Refuse, up front and with the numbers, a run whose records would not fit in memory.
+    `thinning` = (steps, record_every, rows kept at every step whatever record_every says): the
+    record_every that would fit, if one would."""
     need = rows * (columns + 1) * 8
-    if need > _budget():
-        every = math.ceil(need / _budget())
-        raise ScenarioError(f"{source}: the {what} would take {need / 2**30:.3g} GiB ({rows:,} "
-                            f"points × {columns + 1} columns), more than the "
-                            f"{_budget() / 2**30:.3g} GiB a run may keep: record fewer "
-                            f"points (experiment.record_every = {every} or more; the key "
-                            f"figures are read from every step of the last revolution all the "
-                            f"same), record fewer columns, or take a longer step")
+    if need <= _budget():
+        return
+    advice = "record fewer points (a larger experiment.record_every)"
+    if thinning is not None:
+        steps, every, dense = thinning
+        room = max_rows(columns) - dense - 2
+        fits = math.ceil(steps / room) if room > 0 else None
+        advice = (f"record fewer points (experiment.record_every = {fits} or more, not "
+                  f"{every}; the key figures are read from every step of the last revolution "
+                  f"all the same)" if fits and fits > every else
+                  "the last revolution alone, kept at every step, does not fit")
+    raise ScenarioError(f"{source}: the {what} would take {need / 2**30:.3g} GiB ({rows:,} "
+                        f"points × {columns + 1} columns), more than the "
+                        f"{_budget() / 2**30:.3g} GiB a run may keep: {advice}, record fewer "
+                        f"columns, or take a longer step")
 
 
 class Recorder:
@@ -56,13 +66,14 @@ class Recorder:
     `plan` is a list of (instance, "real" or "bool", index in that instance's buffer), one per
     column. `rows`: the number of rows the run will record, or None to grow as needed."""
 
-    def __init__(self, columns: list[str], plan: list, rows: int | None, source: str):
+    def __init__(self, columns: list[str], plan: list, rows: int | None, source: str,
+                 thinning: tuple[int, int, int] | None = None):
         self.columns = columns
         self.plan = plan
         self.source = source
         self.limit = max_rows(len(columns))
         if rows is not None:
-            check_memory(rows, len(columns), source)
+            check_memory(rows, len(columns), source, thinning=thinning)
         self.grows = rows is None
         size = min(GROWN_ROWS, self.limit) if rows is None else rows
         self.times = np.empty(size)

@@ -22,7 +22,8 @@ from pathlib import Path
 
 from sewfmu.errors import Error
 
-_DEBRIS = re.compile(r"^\..+\.(\d+)\.(tmp|partial)$")
+# sewfmu's own temporaries, `.NAME.sewfmu-PID.tmp|partial`: only these are ever cleaned up
+_DEBRIS = re.compile(r"^\..+\.sewfmu-(\d+)\.(tmp|partial)$")
 
 
 class OutputError(Error, ValueError):
@@ -43,7 +44,7 @@ def umask() -> int:
 
 
 def _temporary(path: Path, kind: str) -> Path:
-    return path.parent / f".{path.name}.{os.getpid()}.{kind}"
+    return path.parent / f".{path.name}.sewfmu-{os.getpid()}.{kind}"
 
 
 def write_atomic(path: Path, write, binary: bool = False) -> None:
@@ -96,16 +97,17 @@ def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
     return removed
 
 
-MANIFEST = ".sewfmu-outputs"      # what the last run wrote into an output folder, one per line
+MANIFEST = ".sewfmu-outputs"      # the files the last run wrote into an output folder, one per line
 
 
 def _entries_of_last_run(folder: Path) -> list[str]:
     try:
         lines = (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
-    except OSError:
+    except (OSError, UnicodeDecodeError):
         return []
-    # only plain names inside the folder: a damaged manifest must not reach outside it
-    return [n for n in lines if n and "/" not in n and "\\" not in n and n not in (".", "..")]
+    # only relative paths inside the folder: a damaged manifest must not reach outside it
+    return [n for n in lines if n and "\\" not in n and "\x00" not in n and not n.startswith("/")
+            and all(part not in ("", ".", "..") for part in n.split("/"))]
 
 
 def _remove(path: Path) -> None:
@@ -116,18 +118,23 @@ def _remove(path: Path) -> None:
             path.unlink()
 
 
+def _files_in(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*")
+                  if not p.is_dir() or p.is_symlink())
+
+
 @contextlib.contextmanager
 def replacing(folder: Path):
-    """Yield a staging folder; when the block succeeds its entries take their places in `folder`
-    (the previous run's outputs go, the user's other files stay), when it fails or is interrupted
-    it is removed and `folder` stays as it was."""
+    """Yield a staging folder; when the block succeeds its files take their places in `folder`
+    (the previous run's files go, the user's other files stay, in subfolders too), when it fails
+    or is interrupted it is removed and `folder` stays as it was."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise OutputError(f"output folder {folder}: exists and is not a folder")
     created = not folder.exists()
     folder.mkdir(parents=True, exist_ok=True)
     remove_debris(folder)
-    staging = folder / f".sewfmu.{os.getpid()}.partial"
+    staging = _temporary(folder / "outputs", "partial")
     shutil.rmtree(staging, ignore_errors=True)
     os.mkdir(staging)                        # mode from the umask
     try:
@@ -138,10 +145,18 @@ def replacing(folder: Path):
             with contextlib.suppress(OSError):
                 folder.rmdir()               # only if nothing else is in it
         raise
-    new = sorted(entry.name for entry in staging.iterdir())
-    for name in set(_entries_of_last_run(folder)) | set(new):
+    new = _files_in(staging)
+    old = _entries_of_last_run(folder)
+    for name in set(old) | set(new):
         _remove(folder / name)
+    for name in old:                         # the folders the last run made, if now empty
+        for parent in (folder / name).parents:
+            if parent == folder:
+                break
+            with contextlib.suppress(OSError):
+                parent.rmdir()
     for name in new:
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
         os.rename(staging / name, folder / name)
     write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n" for n in new)))
     shutil.rmtree(staging, ignore_errors=True)

@@ -47,6 +47,9 @@ def load(name_or_path: str) -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{path}: not valid TOML: {err}") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario (tables or arrays "
+                            f"within each other hundreds of levels deep)") from None
     except OSError as err:
         raise ScenarioError(f"{path}: cannot read: {err.strerror or err}") from None
     scenario = from_dict(data, path.stem, str(path))

@@ -37,12 +37,19 @@ COMPARE_KEYS = ("parameter", "values")
 SWEEP_KEYS = ("grid", "points")
 
 
+MAX_DESCRIPTION = 2000
+
+
 def from_dict(data: dict, name: str, source: str) -> Scenario:
     known_top = TOP_KEYS
     for key in data:
         if key not in known_top:
             raise ScenarioError(f"{source}: unknown key {key!r}{did_you_mean(key, known_top)} "
                                 f"(known: {', '.join(sorted(known_top))})")
+    description = data.get("description", "")
+    if not isinstance(description, str) or len(description) > MAX_DESCRIPTION:
+        raise ScenarioError(f"{source}: description must be a text of at most "
+                            f"{MAX_DESCRIPTION} characters (it titles plots and reports)")
     exp = _table(data, "experiment", source)
     known_exp = EXPERIMENT_KEYS
     for key in exp:
@@ -85,7 +92,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         inst = Instance(inst_name, spec["fmu"], {})
         instances[inst_name] = inst
     scenario = Scenario(
-        name=name, source=source, description=str(data.get("description", "")),
+        name=name, source=source, description=description,
         analysis=data.get("analysis"), instances=instances, connections=[],
         record=data.get("record"), step=seconds(exp["step"], f"{source}: experiment.step"),
         master=master,

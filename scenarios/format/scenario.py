@@ -14,12 +14,7 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS, parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
-from sewfmu.scenarios.format.values import (
-    ScenarioError,
-    positive,
-    seconds,
-    short,
-)
+from sewfmu.scenarios.format.values import ScenarioError, plain, positive, seconds, short
 
 
 @dataclass(frozen=True)
@@ -117,7 +112,11 @@ class Scenario:
         takes n steps of h ends where the scenario does (on a whole revolution where it counts
         revolutions)."""
         end = self.end_time()
-        n = max(1, math.ceil(end / self.step * (1.0 - 1e-12)))
+        ratio = end / self.step
+        if not ratio < 1e18:                 # inf from a subnormal step: not a number of steps
+            raise ScenarioError(f"{self.source}: experiment.step {self.step:g} s makes more than "
+                                f"1e18 steps of a {end:g} s run; take a longer step")
+        n = max(1, math.ceil(ratio * (1.0 - 1e-12)))
         return n, end / n
 
     def last_revolution_start(self) -> float | None:
@@ -148,6 +147,7 @@ class Scenario:
 
     def set_value(self, target: str, value: Any, origin: str = "--set") -> None:
         """Apply `instance.parameter = value` (or `experiment.key = value`)."""
+        value = plain(value)
         inst, dot, key = target.partition(".")
         if not dot or not key:
             raise ScenarioError(f"{origin} {target}: expected instance.parameter")

@@ -18,14 +18,14 @@ from __future__ import annotations
 import atexit
 import hashlib
 import os
+import re
 import shutil
 import stat
 import tempfile
-import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from sewfmu.scenarios.files.outputs import alive
+from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES
 from sewfmu.scenarios.format.parse import check_one_source
@@ -111,6 +111,7 @@ MAX_MEMBERS = 10_000
 MAX_XML_BYTES = 64 << 20             # an .ssd or .ssv
 _UNPACKED: dict[str, Path] = {}
 _TEMP_PREFIX = "sewfmu-ssp-"
+_TEMP = re.compile(r"sewfmu-ssp-(?P<pid>\d+)-[A-Za-z0-9_]+")     # tempfile.mkdtemp's suffix
 
 
 def _digest(path: Path) -> str:
@@ -138,7 +139,8 @@ def _inside(base: Path, reference: str) -> Path | None:
 def _unpacked(path: Path, key: str) -> Path:
     """The archive unpacked once per process (the FMUs stay there for the run's workers)."""
     if key not in _UNPACKED:
-        _remove_unpacked_of_dead_processes()
+        # a killed process cannot remove its unpacked archives: the next one does
+        archives.remove_dead_scratch(Path(tempfile.gettempdir()), _TEMP)
         folder = Path(tempfile.mkdtemp(prefix=f"{_TEMP_PREFIX}{os.getpid()}-"))
         atexit.register(shutil.rmtree, folder, True)
         try:
@@ -151,47 +153,14 @@ def _unpacked(path: Path, key: str) -> Path:
 
 
 def _extract(path: Path, folder: Path) -> None:
-    """Unpack the regular files of the archive into folder, counting what is written (the
-    sizes its directory claims may lie)."""
+    """Unpack the regular files of the archive into folder: refused from its directory's sizes
+    before a byte is written, and counted while writing (the sizes it claims may lie)."""
+    # the limits are read here, at the call, so that a test may lower them
+    limits = archives.Limits(MAX_UNPACKED_BYTES, MAX_UNPACKED_BYTES, MAX_MEMBERS, "SSP archive")
     try:
-        with zipfile.ZipFile(path) as archive:
-            members = archive.infolist()
-            if len(members) > MAX_MEMBERS:
-                raise ScenarioError(f"{path}: {len(members)} archive members; an SSP system "
-                                    f"holds at most {MAX_MEMBERS}")
-            written = 0
-            root = folder.resolve()
-            for member in members:
-                target = (folder / member.filename).resolve()
-                if target != root and root not in target.parents:
-                    raise ScenarioError(f"{path}: archive member {member.filename!r} points "
-                                        f"outside the archive")
-                mode = member.external_attr >> 16
-                if member.is_dir():
-                    target.mkdir(parents=True, exist_ok=True)
-                    continue
-                if stat.S_IFMT(mode) not in (0, stat.S_IFREG):    # zip tools may give no type
-                    raise ScenarioError(f"{path}: archive member {member.filename!r} is not a "
-                                        f"regular file (a link or a device)")
-                target.parent.mkdir(parents=True, exist_ok=True)
-                with archive.open(member) as src, open(target, "wb") as dst:
-                    for chunk in iter(lambda: src.read(1 << 20), b""):
-                        written += len(chunk)
-                        if written > MAX_UNPACKED_BYTES:
-                            raise ScenarioError(
-                                f"{path}: unpacks to more than {MAX_UNPACKED_BYTES / 2**30:g} "
-                                f"GiB (a zip bomb?); refused")
-                        dst.write(chunk)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as err:
-        raise ScenarioError(f"{path}: not an SSP archive sewfmu can read ({err})") from None
-
-
-def _remove_unpacked_of_dead_processes() -> None:
-    """A killed process cannot remove its unpacked archives: the next one does."""
-    for folder in Path(tempfile.gettempdir()).glob(f"{_TEMP_PREFIX}*-*"):
-        pid = folder.name[len(_TEMP_PREFIX):].split("-", 1)[0]
-        if pid.isdigit() and int(pid) != os.getpid() and not alive(int(pid)):
-            shutil.rmtree(folder, ignore_errors=True)
+        archives.extract(path, folder, limits)
+    except archives.ArchiveError as err:
+        raise ScenarioError(str(err)) from None
 
 
 def _xml(file: Path, where: Path) -> ET.Element:

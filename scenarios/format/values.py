@@ -29,10 +29,20 @@ def check_instance_name(name: str) -> None:
                          f"not 'experiment'), got {name!r}")
 
 
+def plain(value: Any) -> Any:
+    """numpy scalars and 0-d arrays as the Python numbers they are (np.float32, np.int64, ...);
+    every other value unchanged."""
+    if getattr(value, "shape", None) == () and callable(getattr(value, "item", None)):
+        return value.item()
+    return value
+
+
 def label_of(target: str, value: Any) -> str:
     """`instance.parameter=value` as a short label (a folder name, a legend)."""
     if isinstance(value, float):
-        return f"{target}={value:g}"
+        # short where that is exact, every digit where it is not: two values, two labels
+        text = f"{value:g}"
+        return f"{target}={text if float(text) == value else repr(value)}"
     return f"{target}={value}"
 
 
@@ -69,6 +79,8 @@ def parse_value(text: str, where: str) -> Any:
     """A --set value: a TOML scalar (number or string)."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
+    except RecursionError:
+        raise ScenarioError(f"{where}: nested too deeply to be a value") from None
     except tomllib.TOMLDecodeError:
         if text.lower() in ("nan", "+nan", "-nan", "inf", "+inf", "-inf"):
             return float(text)

@@ -101,11 +101,32 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
             raise ScenarioError(f"{scenario.source}: sweep: points {seen[values]} and "
                                 f"{point.index} are the same ({point.label})")
         seen[values] = point.index
+    folders = {}
+    for point in points:                        # each point's results go to a folder of its own
+        name = folder_for(Path("."), point.label).name
+        if name in folders:
+            raise ScenarioError(f"{scenario.source}: sweep: points {folders[name]} and "
+                                f"{point.index} would share the folder {name!r}")
+        folders[name] = point.index
+    numeric = []
     for point in points:                        # every override must be valid before any runs
         probe = scenario.copy()
         for target, value in point.values:
             probe.set_value(target, value, origin=f"{scenario.source}: sweep")
-    return points
+        # "30 N/mm" and 30000 are one value: the table, the plots and the folders hold the
+        # number in the declared unit, as the run used it
+        numeric.append(Point(point.index, tuple((target, _as_used(probe, target, value))
+                                                for target, value in point.values)))
+    return numeric
+
+
+def _as_used(scenario: Scenario, target: str, given):
+    """A swept value as the scenario holds it after set_value (a parameter with a unit: the
+    number in the declared unit); an experiment key as given."""
+    inst, _, key = target.partition(".")
+    if inst != "experiment" and isinstance(given, str):
+        return scenario.instances[inst].parameters.get(key, given)
+    return given
 
 
 # what the worker processes' fork server imports once, so that no worker imports it again

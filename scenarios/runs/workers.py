@@ -18,6 +18,7 @@ import ctypes
 import multiprocessing
 import os
 import signal
+import sys
 import threading
 import time
 from collections import deque
@@ -84,11 +85,29 @@ def describe_exit(exitcode: int | None) -> str:
     return f"worker process exited with status {exitcode}"
 
 
+@contextlib.contextmanager
+def _main_script_hidden():
+    """Start a worker without the user's script: multiprocessing would run the __main__ module
+    again in every worker (a plain script without `if __name__ == "__main__":` would start its
+    own sweep there). A worker runs only sewfmu's functions, so it needs none of the script."""
+    main = sys.modules.get("__main__")
+    saved = {name: getattr(main, name) for name in ("__file__", "__spec__")
+             if main is not None and hasattr(main, name)}
+    try:
+        for name in saved:
+            setattr(main, name, None) if name == "__spec__" else delattr(main, name)
+        yield
+    finally:
+        for name, value in saved.items():
+            setattr(main, name, value)
+
+
 class _Worker:
     def __init__(self, context, main_pid: int):
         self.conn, child = context.Pipe()
         self.process = context.Process(target=_serve, args=(child, main_pid), daemon=True)
-        self.process.start()
+        with _main_script_hidden():
+            self.process.start()
         child.close()
         self.task = None
 

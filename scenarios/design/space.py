@@ -1,0 +1,270 @@
+"""What a design study varies and what it asks of the key figures.
+
+A variable is an `instance.parameter` between two bounds, written as --set writes a value
+("800..1200 rpm", "15..40", (0.01, "12 mm")), converted into the unit its FMU declares and
+checked against the range the FMU declares, before anything runs. A goal (minimize, maximize,
+a target) and constraints (`F2_peak<=25 N`) name key figures of the scenario's analysis, with
+their values in any unit that fits the figure's.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+from sewfmu.components.parameters import did_you_mean
+from sewfmu.components.units import DISPLAY_UNITS, UnitError, in_unit
+from sewfmu.scenarios.analyses import figure_units
+from sewfmu.scenarios.cosim.divergence import declared_bound
+from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError, short
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+# "LO..HI unit", "LO unit..HI unit": the first ".." that is not inside a number splits it
+_RANGE = re.compile(rf"^\s*({_NUMBER})\s*([^\s\d.+-]\S*?)?\s*\.\.\s*({_NUMBER})\s*(\S+)?\s*$")
+_CONSTRAINT = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|>=)\s*(\S.*?)\s*$")
+_TARGET = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(\S.*?)\s*$")
+# a constraint's margin (relative to its bound) that still counts as met: what SLSQP leaves
+CONSTRAINT_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A varied parameter: bounds in the unit its FMU declares, and where a local method starts
+    (the scenario's value where it lies within the bounds, else the middle)."""
+    name: str
+    lo: float
+    hi: float
+    unit: str
+    start: float
+
+    def at(self, u: float) -> float:
+        """The value at u in [0, 1]: the optimizers work in the unit cube, where every variable
+        has the same scale whatever its unit."""
+        return self.lo + min(max(float(u), 0.0), 1.0) * (self.hi - self.lo)
+
+    def fraction(self, x: float) -> float:
+        return (x - self.lo) / (self.hi - self.lo)
+
+
+def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mapping[str, Any],
+              option: str = "--vary") -> list[Variable]:
+    """The variables of `ranges` ({"instance.parameter": "LO..HI unit" or (lo, hi)}), each
+    checked: a parameter of the scenario, a real number, bounds in order and within the range its
+    FMU declares (`descriptions`: instance -> modelDescription)."""
+    if not isinstance(ranges, Mapping) or not ranges:
+        raise ScenarioError(f"{option}: nothing to vary: give at least one "
+                            f"instance.parameter=LO..HI")
+    out = []
+    for name, spec in ranges.items():
+        name = str(name).strip()
+        where = f"{option} {name}"
+        inst, dot, key = name.partition(".")
+        if inst == "experiment":
+            raise ScenarioError(f"{where}: only parameters of instances can be varied (the "
+                                f"experiment's settings are given with --set)")
+        lo_text, hi_text = _bounds(spec, where)
+        lo, hi = (_in_declared_unit(scenario, name, v, option) for v in (lo_text, hi_text))
+        md = descriptions[inst]
+        var = next(v for v in md.modelVariables if v.name == key)
+        unit = var.unit or ""
+        if kind_of(var) != "Real":
+            raise ScenarioError(f"{where}: {key} is a {kind_of(var)} parameter of {inst} "
+                                f"({md.modelName}); only real parameters can be varied")
+        if not lo < hi:
+            raise ScenarioError(f"{where}: the lower bound {lo:g} {unit} is not below the upper "
+                                f"bound {hi:g} {unit}")
+        low, high = declared_bound(var.min), declared_bound(var.max)
+        for which, value in (("lower", lo), ("upper", hi)):
+            if (low is not None and value < low) or (high is not None and value > high):
+                raise ScenarioError(
+                    f"{where}: the {which} bound {value:g} {unit} lies outside the range "
+                    f"[{'-inf' if low is None else f'{low:g}'}, "
+                    f"{'inf' if high is None else f'{high:g}'}] {unit} that {inst} "
+                    f"({md.modelName}) declares for {key}")
+        given = scenario.instances[inst].parameters.get(key, var.start)
+        try:
+            start = float(given)
+        except (TypeError, ValueError):
+            start = math.nan
+        start = start if lo <= start <= hi else 0.5 * (lo + hi)
+        out.append(Variable(name, lo, hi, unit, start))
+    return out
+
+
+def _bounds(spec: Any, where: str) -> tuple[Any, Any]:
+    """The two bounds as --set takes values: numbers, or strings with their units."""
+    if isinstance(spec, str):
+        match = _RANGE.match(spec)
+        if match is None:
+            raise ScenarioError(f"{where}={spec}: expected LO..HI with an optional unit, like "
+                                f"\"800..1200 rpm\" or \"15..40\"")
+        lo, lo_unit, hi, hi_unit = match.groups()
+        lo_unit, hi_unit = lo_unit or hi_unit, hi_unit or lo_unit      # "800..1200 rpm"
+        return (f"{lo} {lo_unit}" if lo_unit else float(lo),
+                f"{hi} {hi_unit}" if hi_unit else float(hi))
+    if isinstance(spec, (tuple, list)) and len(spec) == 2:
+        return spec[0], spec[1]
+    raise ScenarioError(f"{where}: expected (low, high) or \"LO..HI unit\", got {short(spec)}")
+
+
+def _in_declared_unit(scenario: Scenario, name: str, value: Any, option: str) -> float:
+    """A bound as the scenario would take it with --set (units converted, names checked)."""
+    probe = scenario.copy()
+    probe.set_value(name, value, origin=option)
+    inst, _, key = name.partition(".")
+    return float(probe.instances[inst].parameters[key])
+
+
+def figures_of_scenario(scenario: Scenario) -> dict[str, str]:
+    """The key figures a study may ask for (figure -> unit): its analysis's."""
+    if scenario.compare:
+        raise ScenarioError(f"{scenario.source}: the scenario compares several runs ([compare]); "
+                            f"a design study runs one: take a scenario without [compare]")
+    if not scenario.analysis:
+        raise ScenarioError(f"{scenario.source}: the scenario has no analysis, so no key figures "
+                            f"for a design study to read")
+    return figure_units(scenario.analysis)
+
+
+def check_figure(name: str, known: Mapping[str, str], where: str) -> str:
+    if name not in known:
+        raise ScenarioError(f"{where}: unknown key figure {name!r}{did_you_mean(name, known)} "
+                            f"(the figures: {', '.join(known)})")
+    return name
+
+
+def figure_value(value: Any, unit: str, where: str) -> float:
+    """A figure's value given as a number (in the figure's unit) or a string with a unit that
+    fits ("25 N", "0.5 rad" for a figure in degrees, "0.0055 m" for one in millimetres)."""
+    if isinstance(value, str):
+        try:
+            number = in_unit(value, unit)
+        except UnitError as err:
+            number = None
+            # a figure in a display unit (deg, mm): through its SI unit
+            for base, displays in DISPLAY_UNITS.items():
+                if unit in displays:
+                    try:
+                        number = in_unit(value, base) * displays[unit]
+                    except UnitError:
+                        pass
+            if number is None:
+                raise ScenarioError(f"{where}: {err}") from None
+        value = number
+    if isinstance(value, bool) or not isinstance(value, (int, float)) \
+            or not math.isfinite(float(value)):
+        raise ScenarioError(f"{where}: expected a finite number, with its unit where it has one, "
+                            f"got {short(value)}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Goal:
+    """minimize or maximize one figure, or reach target values of one or more."""
+    sense: str                                     # "minimize", "maximize", "target"
+    targets: tuple[tuple[str, float], ...]         # (figure, value); value unused but in target
+
+    @property
+    def figures(self) -> list[str]:
+        return [f for f, _ in self.targets]
+
+    def objective(self, figures: Mapping[str, Any]) -> float | None:
+        """What the optimizer minimizes; None where a figure has no value at the point."""
+        values = [figures.get(f) for f, _ in self.targets]
+        if any(not isinstance(v, (int, float)) or not math.isfinite(v) for v in values):
+            return None
+        if self.sense == "minimize":
+            return float(values[0])
+        if self.sense == "maximize":
+            return -float(values[0])
+        # relative misses: targets of different units weigh alike
+        return float(sum(((v - t) / (abs(t) or 1.0)) ** 2
+                         for v, (_, t) in zip(values, self.targets)))
+
+    def describe(self) -> dict:
+        if self.sense == "target":
+            return {"target": dict(self.targets)}
+        return {self.sense: self.targets[0][0]}
+
+
+def goal_of(known: Mapping[str, str], minimize: str | None = None, maximize: str | None = None,
+            target: Any = None) -> Goal:
+    """The one goal: minimize=FIGURE, maximize=FIGURE or target={FIGURE: value} (a value
+    may carry its unit; "FIGURE=VALUE unit" as the command line writes it)."""
+    given = [k for k, v in (("minimize", minimize), ("maximize", maximize), ("target", target))
+             if v is not None]
+    if len(given) != 1:
+        raise ScenarioError("give one goal: --minimize FIGURE, --maximize FIGURE or --target "
+                            "\"FIGURE=VALUE unit\"" + (f" (got {', '.join(given)})" if given
+                                                       else ""))
+    if minimize is not None or maximize is not None:
+        sense, figure = ("minimize", minimize) if minimize is not None else ("maximize", maximize)
+        return Goal(sense, ((check_figure(str(figure).strip(), known, f"--{sense}"), math.nan),))
+    items = _target_items(target)
+    return Goal("target", tuple(
+        (check_figure(f, known, "--target"), figure_value(v, known[f], f"--target {f}"))
+        for f, v in items))
+
+
+def _target_items(target: Any) -> list[tuple[str, Any]]:
+    texts = [target] if isinstance(target, str) else target
+    if isinstance(texts, Mapping):
+        items = [(str(f).strip(), v) for f, v in texts.items()]
+    elif isinstance(texts, Sequence) and all(isinstance(t, str) for t in texts):
+        items = []
+        for text in texts:
+            match = _TARGET.match(text)
+            if match is None:
+                raise ScenarioError(f"--target {text}: expected FIGURE=VALUE with an optional "
+                                    f"unit, like \"F2_weld_mean=25 N\"")
+            items.append(match.groups())
+    else:
+        raise ScenarioError(f"target: expected {{figure: value}}, got {short(target)}")
+    if not items:
+        raise ScenarioError("target: no figure given")
+    return items
+
+
+@dataclass(frozen=True)
+class Constraint:
+    figure: str
+    op: str             # ">=" or "<="
+    value: float
+    unit: str
+
+    def margin(self, figures: Mapping[str, Any]) -> float | None:
+        """How far inside (> 0) or outside (< 0) the constraint a point lies, relative to the
+        bound; None where the figure has no value there."""
+        v = figures.get(self.figure)
+        if not isinstance(v, (int, float)) or not math.isfinite(v):
+            return None
+        scale = abs(self.value) or 1.0
+        return (v - self.value) / scale if self.op == ">=" else (self.value - v) / scale
+
+    def __str__(self) -> str:
+        return f"{self.figure}{self.op}{self.value:g}{' ' + self.unit if self.unit else ''}"
+
+
+def constraints_of(known: Mapping[str, str], given: Sequence | None) -> list[Constraint]:
+    """Constraints from "FIGURE>=VALUE unit" texts or (figure, op, value) tuples."""
+    out = []
+    for item in given or []:
+        if isinstance(item, str):
+            match = _CONSTRAINT.match(item)
+            if match is None:
+                raise ScenarioError(f"--constraint {item}: expected FIGURE>=VALUE or "
+                                    f"FIGURE<=VALUE with an optional unit, like \"F2_peak<=25 N\"")
+            figure, op, value = match.groups()
+        elif isinstance(item, (tuple, list)) and len(item) == 3 and item[1] in (">=", "<="):
+            figure, op, value = item
+        else:
+            raise ScenarioError(f"constraint: expected \"FIGURE>=VALUE unit\" or (figure, '>=' or "
+                                f"'<=', value), got {short(item)}")
+        where = f"--constraint {figure}{op}{value}"
+        check_figure(str(figure), known, where)
+        out.append(Constraint(str(figure), op, figure_value(value, known[figure], where),
+                              known[figure]))
+    return out
