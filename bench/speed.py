@@ -77,7 +77,8 @@ def _errors(figures: dict, tight: dict) -> tuple[float, float]:
 
 
 def _monolithic_in_process():
-    from sewfmu.scenarios.analyses import punch, punch_monolithic
+    from sewfmu.scenarios.analyses import punch
+    from sewfmu.scenarios.analyses.solutions import punch_monolithic
     t_end = 10 * 2 * math.pi / 100.0
     solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
                                       sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-4,

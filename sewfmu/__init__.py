@@ -13,7 +13,7 @@ from sewfmu._version import __version__
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
            "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
-           "Diverged"]
+           "Diverged", "optimize", "fit", "sensitivity"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
@@ -22,7 +22,9 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
          "Error": "sewfmu.errors",
          "OutputError": "sewfmu.scenarios.files.outputs",
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
-         "Diverged": "sewfmu.scenarios.cosim.divergence"}
+         "Diverged": "sewfmu.scenarios.cosim.divergence",
+         # the design studies (docs/design.md)
+         **{name: "sewfmu.api" for name in ("optimize", "fit", "sensitivity")}}
 
 
 def scenarios() -> list[str]:

@@ -20,10 +20,10 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from sewfmu.scenarios.analyses import figure_units, figures_of
+from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.values import ScenarioError, plain
 
 __all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
@@ -186,6 +186,14 @@ class Sweep:
                 f"{', '.join(self.swept)}; {len(self.failed)} failed>")
 
 
+class SweepFailed(ScenarioError):
+    """Every point of a sweep failed: `rows` holds each with its error."""
+
+    def __init__(self, message: str, rows: list[dict]):
+        super().__init__(message)
+        self.rows = rows
+
+
 def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
@@ -225,8 +233,9 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
             raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
                 from None
         if rows and all(r["status"] != "ok" for r in rows):
-            raise ScenarioError(f"every point of the sweep failed ({rows[0]['error']})"
-                                + (f"; see {folder}/sweep.csv" if out is not None else ""))
+            raise SweepFailed(f"every point of the sweep failed ({len(rows)} of {len(rows)}; "
+                              f"the first: {rows[0]['error']})"
+                              + (f"; see {folder}/sweep.csv" if out is not None else ""), rows)
         if out is not None and (plot or report):
             sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
@@ -327,3 +336,90 @@ def _frame(series, index: str):
 
 def _short(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+# --- design studies (scenarios/design/, docs/design.md) ---------------------------------------
+def _design_scenario(scenario, set):
+    """The scenario, its FMU files (built where missing) and their modelDescriptions by
+    instance: what a design study checks its ranges and data against before anything runs."""
+    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
+
+    sc = load(scenario, set)
+    paths = fmus_for(sc)
+    return sc, paths, {n: extracted_fmu(Path(paths[i.fmu]))[1] for n, i in sc.instances.items()}
+
+
+def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
+             minimize: str | None = None, maximize: str | None = None,
+             target: Mapping[str, Any] | None = None, constraints: list | None = None,
+             set: Mapping[str, Any] | None = None, method: str = "local",
+             workers: int | None = None, out: str | Path | None = None, plot: bool = False,
+             max_evaluations: int | None = None):
+    """Optimize a key figure over parameter ranges (`sewfmu optimize`): vary {"inst.param":
+    (lo, hi) or "LO..HI unit"}, one of minimize=FIGURE, maximize=FIGURE, target={FIGURE: value},
+    constraints ["FIGURE>=VALUE unit", ...]. Returns an Optimum (.best, .figures,
+    .evaluations, .converged); with `out`, evaluations.csv (a rerun there resumes),
+    optimize.json and with `plot` convergence.png. method "global": differential evolution on
+    `workers` processes (default all cores)."""
+    from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    sc, paths, described = _design_scenario(scenario, set)
+    known = space.figures_of_scenario(sc)
+    goal = space.goal_of(known, minimize, maximize, target)
+    limits = space.constraints_of(known, constraints)
+    variables = space.variables(sc, vary, described)
+    if plot and out is None:
+        raise ScenarioError("plot is a file: give out= a folder for it")
+    return design.optimize(sc, paths, variables, goal, limits, method,
+                           _workers(workers, method == "global"), out, plot, max_evaluations)
+
+
+def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
+        set: Mapping[str, Any] | None = None, out: str | Path | None = None,
+        max_evaluations: int | None = None):
+    """Fit parameters to measurements (`sewfmu fit`): data a CSV file (a `time` column and
+    columns named like recorded outputs, `punch.F2`) or a structured array; free
+    {"inst.param": (lo, hi)}. Returns a Fit (.estimates, .standard_errors, .residuals); with
+    `out`, fit.json and fit.png."""
+    from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    sc, paths, described = _design_scenario(scenario, set)
+    measured = design.read_data(data)
+    ends = {"experiment.stop_time", "experiment.revolutions"}
+    sc = design.check_data(measured, sc, described, keep_end=bool(ends & {*(set or {})}))
+    free = space.variables(sc, free, described, option="--free")
+    return design.fit(sc, paths, free, measured, out, True, max_evaluations)
+
+
+def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],
+                *, set: Mapping[str, Any] | None = None, method: str = "sobol",
+                samples: int | None = None, workers: int | None = None,
+                out: str | Path | None = None, progress: bool = False):
+    """Global sensitivity of key figures to parameter ranges (`sewfmu sensitivity`): SALib's
+    Sobol or Morris method, the samples run as a sweep (parallel, resumable into `out`).
+    Returns a Sensitivity whose `table` ranks the parameters for each figure."""
+    from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    sc, _, described = _design_scenario(scenario, set)
+    known = space.figures_of_scenario(sc)
+    figures = [figures] if isinstance(figures, str) else list(figures or [])
+    if not figures:
+        raise ScenarioError("--figure: name at least one key figure")
+    figures = [space.check_figure(f, known, "--figure") for f in figures]
+    variables = space.variables(sc, vary, described)
+    return design.sensitivity(sc, variables, figures, known, method, samples,
+                              _workers(workers, True), out, progress)
+
+
+def _workers(workers: int | None, parallel: bool) -> int:
+    import os  # only here: the default pool is every core
+
+    if workers is None:
+        return (os.cpu_count() or 1) if parallel else 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ScenarioError(f"workers: a whole number >= 1, got {workers!r}")
+    return workers

@@ -108,13 +108,24 @@ def cmd_sweep(args) -> None:
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_sweep"
-    sweep = api.sweep(scenario, grid, workers=args.workers, scheduler=args.scheduler, out=out,
-                      plot=args.plot, report=args.report, progress=not args.quiet,
-                      results=args.results)
-    print(f"{scenario.name}: {len(sweep.rows)} points, {len(sweep.failed)} failed; table in "
-          f"{out}/sweep.csv")
-    for row in sweep.failed:
-        values = ",".join(label_of(name, row[name]) for name in sweep.swept)
+    try:
+        sweep = api.sweep(scenario, grid, workers=args.workers, scheduler=args.scheduler,
+                          out=out, plot=args.plot, report=args.report, progress=not args.quiet,
+                          results=args.results)
+        rows = sweep.rows
+    except api.SweepFailed as err:
+        rows = err.rows
+        _print_sweep(scenario.name, rows, out)
+        raise
+    _print_sweep(scenario.name, rows, out)
+
+
+def _print_sweep(name: str, rows: list[dict], out: Path) -> None:
+    failed = [r for r in rows if r["status"] != "ok"]
+    print(f"{name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
+    for row in failed:                  # a failed row: its index, key, swept values, error
+        values = ",".join(label_of(k, v) for k, v in row.items()
+                          if k not in ("index", "key", "status", "error"))
         print(f"  failed: {values}: {row['error']}")
 
 
@@ -365,6 +376,7 @@ def main(argv=None) -> int:
                    help="report.html: what was run, the table of points and the plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sweep)
+    _design_commands(sub)
     for stream in (sys.stdout, sys.stderr):
         # a terminal that is not UTF-8 gets escapes for ω or °, not a UnicodeEncodeError
         if hasattr(stream, "reconfigure"):
@@ -383,7 +395,8 @@ def main(argv=None) -> int:
         status = err.exit_status if isinstance(err, Interrupted) else 130
         name = err.args[0] if isinstance(err, Interrupted) else "SIGINT"
         kept = ("the points finished so far are kept: the same command resumes"
-                if args.command == "sweep" else "nothing of the interrupted run was written")
+                if args.command in ("sweep", "optimize", "sensitivity")
+                else "nothing of the interrupted run was written")
         print(f"sewfmu: interrupted ({name}); {kept}", file=sys.stderr)
         return status
     except BrokenPipeError:
@@ -422,7 +435,7 @@ def explain(err: Exception, command: str) -> str:
 # the optional packages and the extra of pyproject.toml that installs each
 EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
           "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
-          "pandas": "pandas"}
+          "pandas": "pandas", "SALib": "design"}
 
 
 def install_command(extra: str) -> str:
@@ -463,6 +476,13 @@ def _whole_number(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
     return value
+
+
+def _design_commands(sub) -> None:
+    """optimize, fit, sensitivity (sewfmu/design_cli.py)."""
+    from sewfmu.design_cli import add_commands  # a module of their own: this one's size
+
+    add_commands(sub)
 
 
 if __name__ == "__main__":

@@ -40,7 +40,7 @@ def declared_bound(text) -> float | None:
 
 
 class DivergenceWatch:
-    """Watches the inputs of the FMUs on feedback loops (scenarios.instances.Instance objects)."""
+    """Watches the inputs of the FMUs on feedback loops (Instance objects of cosim/instances.py)."""
 
     def __init__(self, loop_instances, step: float):
         self.step = step

@@ -40,7 +40,7 @@ class FmiCallError(RuntimeError):
     def __init__(self, call: str, status: int, instance=None, when: str | None = None):
         self.call = call
         self.status = Status(status) if 0 <= status <= 5 else status
-        self.instance = instance          # the scenarios.instances.Instance it failed on
+        self.instance = instance          # the Instance (cosim/instances.py) it failed on
         self.when = when                  # "from t = … to … s", where the caller knows better
         name = self.status.name if isinstance(self.status, Status) else str(status)
         super().__init__(f"{call} returned {name}")

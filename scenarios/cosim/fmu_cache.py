@@ -278,15 +278,21 @@ def _extract_for_process(path: Path, limits: archives.Limits) -> str:
     tmp = tempfile.gettempdir()
     if tmp not in _SWEPT:
         archives.remove_dead_scratch(Path(tmp), _TEMP)
+        # and again at exit: a sweep's workers end without running atexit (multiprocessing
+        # leaves by os._exit), so their folders are theirs to remove only once they are dead
+        atexit.register(archives.remove_dead_scratch, Path(tmp), _TEMP)
         _SWEPT.add(tmp)
-    folder = tempfile.mkdtemp(prefix=f"{_TEMP_PREFIX}{os.getpid()}-", dir=tmp)
-    atexit.register(shutil.rmtree, folder, True)
+    folder = None
     try:
+        folder = tempfile.mkdtemp(prefix=f"{_TEMP_PREFIX}{os.getpid()}-", dir=tmp)
+        atexit.register(shutil.rmtree, folder, True)
         archives.extract(path, Path(folder), limits)
     except archives.ArchiveError as err:
         shutil.rmtree(folder, ignore_errors=True)
         raise CosimError(str(err)) from None
     except OSError as err:
-        shutil.rmtree(folder, ignore_errors=True)
-        raise CosimError(f"FMU {path}: cannot be read ({err.strerror or err})") from None
+        if folder is not None:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise CosimError(f"FMU {path}: cannot be extracted into {tmp} "
+                         f"({err.strerror or err})") from None
     return folder

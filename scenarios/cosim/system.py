@@ -25,7 +25,7 @@ class System:
     """The connected instances of one scenario, in the order data flows through them."""
 
     def __init__(self, scenario: Scenario, make: Callable, log: LogCollector):
-        """`make(instance declaration, log)` gives the Instance (scenarios.instances)."""
+        """`make(instance declaration, log)` gives the Instance (cosim/instances.py)."""
         self.scenario = scenario
         by_name = {inst.name: make(inst, log) for inst in scenario.instances.values()}
         self._connect(by_name)

@@ -39,6 +39,7 @@ from sewfmu.scenarios.format.values import ScenarioError
 
 # the model code every FMU carries: all of components/, nothing else
 MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent
+BUILD_DIR = Path(__file__).resolve().parent
 VERSION = __version__     # sewfmu's one version (sewfmu/_version.py)
 
 
@@ -122,14 +123,27 @@ def default_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
     return base / "fmi3" if fmi == 3 else base
 
 
+def _hash_of(*folders: Path) -> str:
+    digest = hashlib.sha256()
+    for folder in folders:
+        for path in sorted(Path(folder).glob("*.py")):
+            digest.update(path.name.encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
 def model_code_hash(source: Path = MODEL_CODE_DIR) -> str:
     """Hash of the model code every FMU carries: the name and bytes of each .py file in
-    components/ (the FMI 2.0 and 3.0 layers both; nothing outside that folder)."""
-    digest = hashlib.sha256()
-    for path in sorted(Path(source).glob("*.py")):
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
+    components/ (the FMI 2.0 and 3.0 layers both; nothing outside that folder). It names the
+    package inside the FMU: same code, same name."""
+    return _hash_of(source)
+
+
+def fmu_content_hash(source: Path = MODEL_CODE_DIR) -> str:
+    """Hash of everything an FMU is made from: the model code (components/) and this build
+    (fmu_build/: the entry script, the carried reference, the documentation page). It is the
+    FMU's version: an edit of either rebuilds the FMUs."""
+    return _hash_of(source, BUILD_DIR)
 
 
 def fmu_version(fmu_path: Path) -> str | None:
@@ -143,7 +157,7 @@ def fmu_version(fmu_path: Path) -> str | None:
 
 
 def current_version() -> str:
-    return f"{VERSION}+{model_code_hash()}"
+    return f"{VERSION}+{fmu_content_hash()}"
 
 
 def _builder(fmi: int):
@@ -193,8 +207,9 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
             + "".join(f"from . import {mod}  # noqa: F401\n" for mod in modules))
         script = tmp / f"{script_module}.py"
         template = _SCRIPT_3 if fmi == 3 else _SCRIPT
+        version = f"{VERSION}+{fmu_content_hash(source)}"
         script.write_text(template.format(name=name, tag=tag, package=package, module=module,
-                                          slave=slave, doc=slave_doc, version=f"{VERSION}+{tag}"))
+                                          slave=slave, doc=slave_doc, version=version))
         saved_path = list(sys.path)
         try:
             # the FMI 3.0 layer writes its CoSimulation options itself

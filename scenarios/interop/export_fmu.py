@@ -10,20 +10,37 @@ the FMU's default) and the scenario's recorded outputs; its DefaultExperiment is
 a whole number of even steps.
 
 The FMUs inside are sewfmu's Python FMUs: a host needs what they need (libpython loaded, a
-Python home; docs/fmi.md). The container steps at a fixed step, as the Jacobi master does:
-scenarios run by the iterative or adaptive master are refused unless exported for Jacobi.
+Python home; docs/fmi.md). They are their FMI 3.0 builds whatever the container's version: the
+container library hands an FMI 2.0 component the address of a callbacks struct on its own stack,
+which pythonfmu keeps and calls through at its next log line, after the struct is gone (the
+segmentation fault of every bad parameter with logging on; FMI 3.0 passes the callback by
+value). Inside the container they log their errors with logging off too: it is their only way
+to the host (components/fmi3_layer.py).
+
+Nothing is exported that `sewfmu run` refuses: the scenario's parameters are checked against the
+declared ranges, and the scenario is then run once by sewfmu's own master on the very FMUs the
+container holds (a bad parameter an FMU itself refuses, a Jacobi step that diverges). The
+container steps at a fixed step, as the Jacobi master does: scenarios run by the iterative or
+adaptive master are refused unless exported for Jacobi.
 """
 from __future__ import annotations
 
+import html
 import json
 import shutil
 import tempfile
 import uuid
 import zipfile
 from pathlib import Path
+from xml.etree import ElementTree
 
+from sewfmu.components.registry import FMUS
+from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.algorithms import FIXED_STEP
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.cosim.system import check_parameters
+from sewfmu.scenarios.fmu_build.build import current_version, fmus_for_names
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
@@ -52,10 +69,16 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
         raise ScenarioError(f"--fmi: the FMI version of the exported FMU, 2 or 3, got {fmi!r}")
     n, h = scenario.even_steps()
     stop = scenario.end_time()
+    inside = _components_inside(scenario, fmu_paths)
+    described = {name: read_model_description(str(path), validate=False)
+                 for name, path in inside.items()}
+    # what `sewfmu run` refuses before any FMU runs, then what it refuses running
+    check_parameters(scenario, {i.name: described[i.fmu] for i in scenario.instances.values()})
+    _refused_by_run(scenario, inside)
     components, variables, units = {}, {}, {}
     for inst in scenario.instances.values():
-        md = read_model_description(str(fmu_paths[inst.fmu]), validate=False)
-        components[inst.name] = Component(name=inst.name, filename=Path(fmu_paths[inst.fmu]),
+        md = described[inst.fmu]
+        components[inst.name] = Component(name=inst.name, filename=Path(inside[inst.fmu]),
                                           modelDescription=md)
         variables[inst.name] = {v.name: v for v in md.modelVariables}
         units.update({u.name: u for u in md.unitDefinitions})
@@ -71,8 +94,45 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
         built, tree = Path(work) / "container.fmu", Path(work) / "tree"
         tree.mkdir()                     # fmpy removes and makes it again
         create_container_fmu(config, tree, built)
-        _finish(built, output, scenario)
+        _finish(built, output, scenario, exposed)
     return output
+
+
+def _components_inside(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict[str, Path]:
+    """The FMU file of each FMU type the container holds: FMI 3.0 ones, as given, or sewfmu's
+    FMI 3.0 build of a sewfmu FMI 2.0 FMU (built beside it, in fmi3/, where missing). An FMI 2.0
+    FMU of pythonfmu's crashes the container's host at its first log line with logging on (see
+    the module docstring): one of another version of sewfmu, or not sewfmu's, is refused."""
+    from fmpy import read_model_description  # fmpy: only when an FMU file is read
+
+    inside = {}
+    for name in sorted({inst.fmu for inst in scenario.instances.values()}):
+        path = Path(fmu_paths[name])
+        md = read_model_description(str(path), validate=False)
+        if md.fmiVersion.startswith("3") or \
+                not (md.generationTool or "").startswith("PythonFMU"):
+            inside[name] = path
+        elif name in FMUS and md.version == current_version():
+            inside[name] = fmus_for_names([name], path.parent, fmi=3)[name]
+        else:
+            raise ScenarioError(f"{scenario.source}: {name} ({path}) is an FMI 2.0 FMU made with "
+                                f"pythonfmu, not this sewfmu's: fmpy's container FMU would crash "
+                                f"its host at the FMU's first log line with logging on "
+                                f"(docs/fmi.md); give the FMI 3.0 version of the FMU")
+    return inside
+
+
+def _refused_by_run(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
+    """Run the scenario once with sewfmu's own master on the container's FMUs: what that run
+    refuses (a parameter an FMU refuses at initialization, a Jacobi step at which a feedback
+    loop diverges), the export refuses, in the run's words. The whole run, not a few steps: a
+    coupling diverges when it does (punch_split at a 2 ms step: after 19 steps), and the
+    catalogue's scenarios run in under a second."""
+    try:
+        run(scenario, fmu_paths)
+    except Error as err:
+        raise ScenarioError(f"{scenario.source}: not exported, `sewfmu run` refuses it: "
+                            f"{err}") from None
 
 
 def _checked_output(output: Path) -> Path:
@@ -93,8 +153,11 @@ def _exposed(scenario: Scenario, components: dict, variables: dict, fmi: int):
     exposed, mappings = [], {}
 
     def expose(instance: str, v, kind: str, **role) -> None:
+        # the component's declared range goes with its parameters and inputs: a host that
+        # checks min and max refuses a bad value before the component has to
+        limits = {} if role["causality"] == "output" else {"min": v.min, "max": v.max}
         var = ModelVariable(name=f"{instance}.{v.name}", type=_typed(kind, fmi), unit=v.unit,
-                            description=v.description, **role)
+                            description=v.description, **limits, **role)
         exposed.append(var)
         mappings[var] = [(components[instance], v)]
 
@@ -167,10 +230,11 @@ def _description(scenario: Scenario, fmi: int, stop: float, step: float, exposed
         modelVariables=[time, *exposed])
 
 
-def _finish(built: Path, output: Path, scenario: Scenario) -> None:
+def _finish(built: Path, output: Path, scenario: Scenario, exposed: list) -> None:
     """The container's configuration in the container library's types (fmpy writes FMI 2.0
-    components' connections as Real), without the stray archive fmpy leaves in it; written
-    next to `output` first and then moved, so that a reader never sees half a file."""
+    components' connections as Real), its variables with their declared ranges (fmpy writes
+    an FMI 3.0 variable's min and max not), without the stray archive fmpy leaves in it;
+    written next to `output` first and then moved, so that a reader never sees half a file."""
     staged = output.with_name(f".{output.name}.partial")
     with zipfile.ZipFile(built) as source, \
             zipfile.ZipFile(staged, "w", zipfile.ZIP_DEFLATED) as target:
@@ -178,6 +242,8 @@ def _finish(built: Path, output: Path, scenario: Scenario) -> None:
             if item.filename == "Container.zip":
                 continue
             data = source.read(item)
+            if item.filename == "modelDescription.xml":
+                data = _with_ranges(data, exposed)
             if item.filename == "resources/container.json":
                 config = json.loads(data)
                 for key in ("connections", "variables"):
@@ -189,12 +255,33 @@ def _finish(built: Path, output: Path, scenario: Scenario) -> None:
     shutil.move(staged, output)
 
 
+def _with_ranges(xml: bytes, exposed: list) -> bytes:
+    """The modelDescription with every exposed variable's min and max where fmpy left them
+    out (an FMI 2.0 one has them already: unchanged)."""
+    limits = {v.name: (v.min, v.max) for v in exposed if v.min is not None or v.max is not None}
+    root = ElementTree.fromstring(xml)
+    if root.get("fmiVersion", "").startswith("2"):     # on the ScalarVariable's type element
+        return xml
+    missing = [e for e in root.find("ModelVariables")
+               if e.get("name") in limits and e.get("min") is None and e.get("max") is None]
+    if not missing:
+        return xml
+    for element in missing:
+        for key, value in zip(("min", "max"), limits[element.get("name")]):
+            if value is not None:
+                element.set(key, str(value))
+    return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
 def _documentation(scenario: Scenario) -> str:
-    fmus = ", ".join(sorted({i.fmu for i in scenario.instances.values()}))
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{scenario.name}</title>"
-            f"</head><body><h1>{scenario.name}</h1><p>{scenario.description}</p>"
-            f"<p>sewfmu's scenario {scenario.name} as one co-simulation FMU (fmpy's container "
+    # every text of the scenario is escaped: a description is the user's text, and a page
+    # a browser opens runs whatever <script> it holds
+    name = html.escape(scenario.name)
+    fmus = html.escape(", ".join(sorted({i.fmu for i in scenario.instances.values()})))
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title>"
+            f"</head><body><h1>{name}</h1><p>{html.escape(scenario.description or '')}</p>"
+            f"<p>sewfmu's scenario {name} as one co-simulation FMU (fmpy's container "
             f"FMU): {fmus} stepped at a fixed step. The FMUs inside are Python FMUs "
-            f"(pythonfmu): the host process needs libpython loaded and a Python home (3.10 to "
+            f"(pythonfmu3): the host process needs libpython loaded and a Python home (3.10 to "
             f"3.13, the standard library only), on Linux x86-64 (win64 binaries untried).</p>"
             f"</body></html>\n")

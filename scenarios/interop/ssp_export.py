@@ -17,6 +17,7 @@ from xml.etree import ElementTree as ET
 from fmpy import read_model_description
 
 from sewfmu.components.units import UNITS
+from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.fmu_build.build import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
@@ -84,8 +85,9 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
             "startElement": con.src, "startConnector": con.src_var,
             "endElement": con.dst, "endConnector": con.dst_var})
     # the step that meets the stop time in whole, even steps: a fixed-step tool ends there
-    # (the adaptive master's step is its first step, not a grid)
-    step = scenario.step if scenario.master == "adaptive" else scenario.even_steps()[1]
+    # (a variable-step master's step is its first step, not a grid)
+    step = scenario.step if ALGORITHMS[scenario.master].variable_step \
+        else scenario.even_steps()[1]
     # the step where OMSimulator reads it (fmpy's SSP parser reads it too, though its
     # simulate_ssp takes the step as an argument: docs/fmi.md)
     oms = ET.SubElement(ET.SubElement(ET.SubElement(system, _q(SSD, "Annotations")),
