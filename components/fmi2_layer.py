@@ -48,7 +48,7 @@ class Fmi2Layer(SewSlave, Fmi2Slave):
             self.remember(var.value_reference, v)
 
     def _error(self, message: str) -> None:
-        self.log(message, Fmi2Status.error)
+        self.log(self.error_line(message), Fmi2Status.error)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._time = float(start_time)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import ctypes
 import datetime
 import math
+import os
 import uuid
 from xml.etree.ElementTree import Element, SubElement
 
@@ -40,6 +41,7 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._start_known = False      # see the module docstring
+        self._in_container = _in_fmpy_container(kwargs.get("resources"))
 
     def register_all(self) -> None:
         # value reference 0 is the independent variable, as in the Modelica Reference FMUs
@@ -51,8 +53,13 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
 
     def _error(self, message: str) -> None:
         # FMI 3.0 allows no logMessage call with logging off; pythonfmu3's binary passes on a
-        # message marked debug only while logging is on (without the mark it passes on all)
-        self.log(message, Fmi3Status.error, debug=True)
+        # message marked debug only while logging is on (without the mark it passes on all).
+        # Inside fmpy's container FMU (sewfmu export-fmu) the line is not marked: the container
+        # instantiates its components with its host's flag and has no channel of its own, so
+        # with logging off a refusal would reach no host at all; the container passes the line
+        # on to its host (docs/fmi.md, "The punch drive as one FMU")
+        in_container = getattr(self, "_in_container", False)
+        self.log(self.error_line(message), Fmi3Status.error, debug=not in_container)
 
     def do_step(self, current_time, step_size):
         if not self._start_known and self._initialized and math.isfinite(current_time):
@@ -169,3 +176,12 @@ class Fmi3Layer(SewSlave, Fmi3Slave):
             attrib["start"] = ("true" if start else "false") if v.kind == "Boolean" \
                 else repr(int(start) if v.kind == "Integer" else float(start))
         return attrib
+
+
+def _in_fmpy_container(resources: str | None) -> bool:
+    """Whether this instance is a component of fmpy's container FMU: the container unpacks each
+    component FMU into its own resources/<name>/, beside its configuration container.json, so a
+    component's resources folder is <container>/resources/<name>/resources."""
+    if not resources:
+        return False
+    return os.path.isfile(os.path.join(resources, os.pardir, os.pardir, "container.json"))

@@ -213,14 +213,17 @@ class SewSlave(ExceptionFreeAccess):
         try:
             outputs = self.current_outputs()
         except Exception as err:          # noqa: BLE001 - any failure is reported, none escapes
-            self._error_once(f"outputs unavailable: {describe(err)}")
+            # a NaN input is the cause, not what the model then fails on (a linkage given a NaN
+            # angle finds pivots that coincide): name it, to lead to the FMU that failed first
+            self._error_once(f"outputs unavailable: {self._nan_input() or describe(err)}")
             return {p.name: (False if p.kind == "Boolean" else math.nan)
                     for p in (*type(self).outputs, *type(self).calculated)}
         bad = _non_finite(outputs)
         if bad:
-            self._error_once(f"output {bad} is {outputs[bad]} at t = {self._time:g} s: the model "
-                             f"has left the range where it computes (inputs or parameters too "
-                             f"large?)", key=f"output {bad} is {outputs[bad]}")
+            cause = self._nan_input() or ("the model has left the range where it computes "
+                                          "(inputs or parameters too large?)")
+            self._error_once(f"output {bad} is {outputs[bad]} at t = {self._time:g} s: {cause}",
+                             key=f"output {bad} is {outputs[bad]}")
         return outputs
 
     # --- the model -----------------------------------------------------------------------------
@@ -240,8 +243,16 @@ class SewSlave(ExceptionFreeAccess):
         return self._model
 
     def _error(self, message: str) -> None:
-        """Log an Error line (the FMI layer logs in its version's terms)."""
+        """Log an Error line (the FMI layer logs in its version's terms, as `error_line`)."""
         raise NotImplementedError("the FMI layer logs")
+
+    def error_line(self, message: str) -> str:
+        """An Error line as every host can show it: naming this instance and its FMU (a
+        container FMU passes its components' lines on under its own name; FMI 3.0 passes no
+        name), and without '%' (FMI 2.0's logger is printf-like: hosts and containers pass a
+        line on as the format, and a '%s' in one crashed fmpy with the container FMU)."""
+        name = getattr(self, "instance_name", "") or "?"
+        return f"{name} ({self.modelName}): {message}".replace("%", " percent")
 
     def _error_once(self, message: str, key: str | None = None) -> None:
         """Log an error, but not the same one (the same `key`) again at every getter call of a
@@ -292,10 +303,18 @@ class SewSlave(ExceptionFreeAccess):
                 u[name] = total
         return u
 
-    def _bad_input(self) -> str | None:
+    def _nan_input(self) -> str | None:
+        # a NaN input comes from an FMU that failed first (or a host's mistake): say where to look
         for name, value in self._inputs.items():
             if not (isinstance(value, float) and math.isfinite(value)):
-                return f"input {name} is {value} at t = {self._time:g} s"
+                return (f"input {name} is {value} at t = {self._time:g} s (the FMU or host that "
+                        f"gives it failed first: see its error)")
+        return None
+
+    def _bad_input(self) -> str | None:
+        nan = self._nan_input()
+        if nan:
+            return nan
         for name, bound, unit in self._ranges:
             value = self._inputs[name]
             if not -bound <= value <= bound:
@@ -312,7 +331,7 @@ class SewSlave(ExceptionFreeAccess):
             model = self.model()
             bad = self._bad_input()
             if bad:
-                raise FmuError(f"{bad} at initialization")
+                raise FmuError(f"at initialization: {bad}")
             self.initialize(model)
         except Exception as err:          # noqa: BLE001
             self._broken = describe(err)

@@ -18,7 +18,8 @@ __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "s
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
 _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "build", "show",
-                                            "Run", "Sweep", "Scenario", "ScenarioError")},
+                                            "Run", "Sweep", "Scenario", "ScenarioError",
+                                            "InaccurateRun")},
          "Error": "sewfmu.errors",
          "OutputError": "sewfmu.scenarios.files.outputs",
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from sewfmu.errors import Error
 from sewfmu.scenarios.analyses import figure_units, figures_of
 from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.loader import catalogue
@@ -105,6 +106,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
     a progress bar on the terminal."""
+    from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_outputs  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.variants import (  # loaded on first use (start-up time)
@@ -129,10 +131,16 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
             raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
     out = Path(out) if out is not None else None
     each = {label: _run_of(label or sc.name, result, own, out) for label, result, own in runs}
-    if not sc.compare:
-        return each[""]
-    summary = summary_of_runs(sc, runs)
-    return Run(sc.name, summary, None, {}, out, runs=each)
+    made = each[""] if not sc.compare else \
+        Run(sc.name, summary_of_runs(sc, runs), None, {}, out, runs=each)
+    beyond = [f"{label + ': ' if label else ''}{line}" for label, _, own in runs
+              for line in accuracy.beyond(own, sc.accuracy)]
+    if beyond and not sc.accept_error:
+        raise InaccurateRun(f"{sc.name}: the coupling error is beyond experiment.accuracy = "
+                            f"{sc.accuracy:g} of each figure: {'; '.join(beyond)}; take a "
+                            f"shorter experiment.step (or another master), or accept it with "
+                            f"experiment.accept_error = true", made)
+    return made
 
 
 def _run_of(name: str, result, summary: dict, out: Path | None) -> Run:
@@ -184,6 +192,15 @@ class Sweep:
     def __repr__(self) -> str:
         return (f"<sewfmu.Sweep {self.name}: {len(self.rows)} points over "
                 f"{', '.join(self.swept)}; {len(self.failed)} failed>")
+
+
+class InaccurateRun(Error):
+    """A run whose estimated coupling error exceeds experiment.accuracy: `run` holds what it
+    gave (its files are written where out= was given)."""
+
+    def __init__(self, message: str, run: "Run"):
+        super().__init__(message)
+        self.run = run
 
 
 class SweepFailed(ScenarioError):

@@ -6,20 +6,17 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import json
 import os
 import signal
 import sys
 import warnings
-from importlib import metadata
 from pathlib import Path
-from urllib.parse import unquote, urlparse
 
-from sewfmu import api
+from sewfmu import api, console
 from sewfmu._version import __version__
 from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_sigterm
 from sewfmu.scenarios.format.loader import load
-from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
+from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
 
 def _load_with_sets(name: str, sets: list[str]):
@@ -66,22 +63,17 @@ def cmd_run(args) -> None:
                                 f"mechanism; run a scenario to see one move")
         summary = run_study(args.scenario, out, plot=args.plot, report=args.report)
         print(f"{args.scenario}: results in {out}/")
-        print("  " + ", ".join(f"{k} = {_fmt(v)}" for k, v in summary.items()))
+        print("  " + ", ".join(f"{k} = {console.fmt(v)}" for k, v in summary.items()))
         return
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
-    run = api.run(scenario, out=out, plot=args.plot, animate=args.animate, report=args.report,
-                  progress=True)
-    print(f"{scenario.name}: results in {out}/")
-    runs = run.runs or {"": run}
-    for label, each in runs.items():
-        if each.summary.get("master_unconverged_steps"):
-            print(f"sewfmu: warning: {label + ': ' if label else ''}the iterative coupling did "
-                  f"not converge in {each.summary['master_unconverged_steps']} steps (a shorter "
-                  f"step or a looser experiment.tolerance helps)", file=sys.stderr)
-    for label, each in runs.items():
-        shown = ", ".join(f"{k} = {_fmt(v)}" for k, v in each.figures.items())
-        print(f"  {label + ': ' if label else ''}{shown}")
+    try:
+        run = api.run(scenario, out=out, plot=args.plot, animate=args.animate,
+                      report=args.report, progress=True)
+    except api.InaccurateRun as err:
+        console.print_run(scenario.name, err.run, out)
+        raise
+    console.print_run(scenario.name, run, out)
 
 
 def cmd_compare(args) -> None:
@@ -90,16 +82,16 @@ def cmd_compare(args) -> None:
     print(f"{scenario.name} ({scenario.master}, step {scenario.step:g} s): "
           f"co-simulation vs monolithic solution")
     if args.rtol is None:
-        _print_side_by_side([(k, f["cosim"], f["monolithic"], f["difference"])
+        console.print_side_by_side([(k, f["cosim"], f["monolithic"], f["difference"])
                              for k, f in figures.items()], "co-simulation", "monolithic")
         return
     loose = f"rtol {args.rtol:g}"
     print(f"  {'figure':22s} {'co-simulation':>14s} {loose:>14s} {'tight':>14s} "
           f"{'co-sim error':>13s} {loose + ' error':>17s}")
     for key, f in figures.items():
-        print(f"  {key:22s} {_cell(f['cosim'], 14)} {_cell(f['monolithic_rtol'], 14)} "
-              f"{_cell(f['monolithic'], 14)} {_cell(f['difference'], 13)} "
-              f"{_cell(f['rtol_error'], 17)}")
+        print(f"  {key:22s} {console.cell(f['cosim'], 14)} {console.cell(f['monolithic_rtol'], 14)} "
+              f"{console.cell(f['monolithic'], 14)} {console.cell(f['difference'], 13)} "
+              f"{console.cell(f['rtol_error'], 17)}")
 
 
 def cmd_sweep(args) -> None:
@@ -115,18 +107,9 @@ def cmd_sweep(args) -> None:
         rows = sweep.rows
     except api.SweepFailed as err:
         rows = err.rows
-        _print_sweep(scenario.name, rows, out)
+        console.print_sweep(scenario.name, rows, out)
         raise
-    _print_sweep(scenario.name, rows, out)
-
-
-def _print_sweep(name: str, rows: list[dict], out: Path) -> None:
-    failed = [r for r in rows if r["status"] != "ok"]
-    print(f"{name}: {len(rows)} points, {len(failed)} failed; table in {out}/sweep.csv")
-    for row in failed:                  # a failed row: its index, key, swept values, error
-        values = ",".join(label_of(k, v) for k, v in row.items()
-                          if k not in ("index", "key", "status", "error"))
-        print(f"  failed: {values}: {row['error']}")
+    console.print_sweep(scenario.name, rows, out)
 
 
 def cmd_show(args) -> None:
@@ -201,7 +184,7 @@ def _references_of_files(args) -> None:
             elif args.plot:
                 folder = Path(args.plot)
                 folder.mkdir(parents=True, exist_ok=True)
-                picture = folder / f"{outcome.reference.model}_differences.png"
+                picture = fmu_reference.plot_file(folder, outcome.reference.model, fmu)
                 fmu_reference.plot(Path(fmu).name, outcome.got, outcome.reference,
                                    outcome.deviations, picture)
                 print(f"wrote {picture}")
@@ -239,25 +222,7 @@ def cmd_crosscheck(args) -> None:
     rows = crosscheck(scenario, args.host, out)
     print(f"{scenario.name} (step {scenario.step:g} s): sewfmu's master beside {args.host}; "
           f"results in {out}/")
-    _print_side_by_side(rows, "sewfmu", args.host)
-
-
-def _print_side_by_side(rows, left: str, right: str) -> None:
-    """Rows (figure, left value, right value, difference) as an aligned table."""
-    print(f"  {'figure':22s} {left:>14s} {right:>14s} {'difference':>12s}")
-    for key, a, b, d in rows:
-        print(f"  {key:22s} {_cell(a, 14)} {_cell(b, 14)} {_cell(d, 12)}")
-
-
-def _cell(value, width: int) -> str:
-    """A value right-aligned in its column; nothing for a difference that has none."""
-    return f"{_fmt(value) if value is not None else '':>{width}s}"
-
-
-def _fmt(value) -> str:
-    if isinstance(value, float):
-        return f"{value:.4f}"
-    return str(value)
+    console.print_side_by_side(rows, "sewfmu", args.host)
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -406,55 +371,9 @@ def main(argv=None) -> int:
     except Exception as err:        # one clear line for the user; --debug for the traceback
         if args.debug:
             raise
-        print(f"sewfmu: error: {explain(err, args.command)}", file=sys.stderr)
+        print(f"sewfmu: error: {console.explain(err, args.command)}", file=sys.stderr)
         return 1
     return 0
-
-
-def explain(err: Exception, command: str) -> str:
-    """An error as one line that says what was wrong and where."""
-    from sewfmu.errors import Error  # light: the base of every refusal
-
-    if isinstance(err, Error):
-        return " ".join(str(err).split())
-    if isinstance(err, ModuleNotFoundError) and err.name:
-        extra = EXTRAS.get(err.name.split(".")[0])
-        if extra:
-            return (f"`sewfmu {command}` needs the optional package {err.name.split('.')[0]}: "
-                    f"{install_command(extra)}")
-    if isinstance(err, OSError) and err.strerror:
-        where = f"{err.filename}: " if err.filename else ""
-        return f"{where}{err.strerror}"
-    if isinstance(err, MemoryError):
-        return f"out of memory during `sewfmu {command}` (a smaller experiment.record_every " \
-               f"or a shorter run needs less)"
-    return (f"unexpected {type(err).__name__} during `sewfmu {command}`: {err} "
-            f"(a bug in sewfmu: please report it; --debug shows where)")
-
-
-# the optional packages and the extra of pyproject.toml that installs each
-EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
-          "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
-          "pandas": "pandas", "SALib": "design"}
-
-
-def install_command(extra: str) -> str:
-    """The pip command that adds an extra to this sewfmu, from where it was installed: its
-    checkout (editable or not), its wheel, or the package index."""
-    # (a build's sewfmu.egg-info in the working folder is a distribution too, without origin)
-    found = [d.read_text("direct_url.json") for d in metadata.distributions(name="sewfmu")]
-    try:
-        origin = json.loads(next((t for t in found if t), "{}")) if found else None
-    except ValueError:
-        origin = {}
-    if origin is None:                    # not installed: running from a checkout
-        return f"pip install -e \".[{extra}]\" in sewfmu's checkout"
-    url = origin.get("url", "")
-    if not url.startswith("file://"):
-        return f"pip install \"sewfmu[{extra}]\""
-    where = unquote(urlparse(url).path)
-    editable = "-e " if origin.get("dir_info", {}).get("editable") else ""
-    return f"pip install {editable}\"{where}[{extra}]\""
 
 
 def _positive_number(text: str) -> float:

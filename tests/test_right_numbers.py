@@ -14,8 +14,9 @@ from fmpy import read_model_description
 from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
-from sewfmu.cli import explain, main
+from sewfmu.cli import main
 from sewfmu.components.carriage import CarriageModal, CarriageParams
+from sewfmu.console import explain
 from sewfmu.scenarios.analyses import RunTooShort
 from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.cosim.master import Master, run

@@ -63,6 +63,9 @@ class Mechanism:
     roles: dict[str, str]                  # role -> the FMU type that plays it
     figures: dict[str, str]                # key figure -> unit (summary.json, sweeps, reports)
     animation: str | None = None           # the module of scenarios/animations that draws it
+    # its figures are read from positions the FMUs give exactly at each communication point (a
+    # linkage's kinematics): no coupling error to estimate (runs/accuracy.py)
+    kinematic: bool = False
     monolithic: bool = False               # solved as one ODE (its module: monolithic_figures)
     studies: dict[str, Study] = field(default_factory=dict)
     # FMU type -> its regression case, for the FMUs this mechanism brings (the shared MainShaft's
@@ -71,7 +74,8 @@ class Mechanism:
 
 
 # what a summary says of the run itself rather than of the mechanism
-RUN_KEYS = ("scenario", "master", "step", "stop_time", "provenance", "units", "runs", "compare")
+RUN_KEYS = ("scenario", "master", "step", "stop_time", "provenance", "units", "runs", "compare",
+            "coupling_error")
 
 
 def figures_of(summary: dict) -> dict:

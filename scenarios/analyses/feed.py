@@ -174,6 +174,7 @@ def _headline(study: dict) -> dict:
 
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "feed": "FeedLinkage"}, figures=FIGURES, animation="feed",
+    kinematic=True,
     regression={"FeedLinkage": RegressionCase(2 * math.pi / 303.5, 5e-5, shaft_at(303.5))},
     studies={"feed_ratio": Study(
         "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "

@@ -234,6 +234,7 @@ REGRESSION_SPEED = 523.5987755982989      # rad/s: 5000 rpm, one revolution for 
 
 MECHANISM = Mechanism(
     roles={"shaft": "MainShaft", "takeup": "TakeupLinkage"}, figures=FIGURES, animation="takeup",
+    kinematic=True,
     regression={"TakeupLinkage": RegressionCase(2 * math.pi / REGRESSION_SPEED, 2e-5,
                                                 shaft_at(REGRESSION_SPEED))},
     studies={"takeup_tolerance": Study(

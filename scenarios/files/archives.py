@@ -74,9 +74,9 @@ def _refuse(path: Path, limits: Limits, text: str) -> ArchiveError:
 
 
 def _too_big(path: Path, limits: Limits, whose: str, size: int, limit: int) -> ArchiveError:
-    raise_it = f", {limits.setting} raises it" if limits.setting else ""
+    raise_it = f" ({limits.setting} raises it)" if limits.setting else ""
     return _refuse(path, limits, f"{whose} unpacks to {_mib(size)}, more than the {_mib(limit)} "
-                                 f"allowed (a zip bomb?{raise_it}); refused")
+                                 f"allowed{raise_it}; refused (a zip bomb?)")
 
 
 def _checked(path: Path, archive: zipfile.ZipFile, limits: Limits) -> list[tuple]:

@@ -25,7 +25,9 @@ def _rows(items) -> str:
 
 
 def page(slave_class, fmi: int) -> str:
-    name = slave_class.model_name or slave_class.__name__
+    # every text from the code is escaped as the tables' are: a page a browser opens must not
+    # take a '<' of a docstring or a name for markup (HOST_NEEDS alone is markup, written here)
+    name = html.escape(slave_class.model_name or slave_class.__name__)
     doc = (slave_class.__doc__ or "").strip()
     params = parameter_info(slave_class.params_class) if slave_class.params_class else []
     stop, step = slave_class.whole_step_experiment()

@@ -40,6 +40,12 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
     ExperimentKey("record_every", "keep every n-th communication point (long runs); the last "
                   "revolution is always kept whole", "1", "10"),
     ExperimentKey("fmi", "FMI version of sewfmu's FMUs the run uses: 2 or 3", "2", "3"),
+    ExperimentKey("accuracy", "the coupling error a run's key figures may carry, relative to "
+                  "each figure; estimated by the same run at twice the step (the adaptive "
+                  "master: 8 times its tolerance); beyond it the run says so and fails",
+                  "0.05", "0.01"),
+    ExperimentKey("accept_error", "true: a run beyond its accuracy succeeds all the same (its "
+                  "estimate is still reported)", "false", "true"),
 )}
 
 

@@ -57,6 +57,8 @@ class Scenario:
     tolerance_master: str | None = None     # the master a file's tolerance was given for
     acceleration: str = "aitken"                          # iterative master
     fmi: int = 2                      # the FMI version of sewfmu's FMUs it runs (2 or 3)
+    accuracy: float = 0.05            # the relative coupling error its key figures may carry
+    accept_error: bool = False        # a run beyond its accuracy succeeds all the same
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/format/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
@@ -211,6 +213,15 @@ class Scenario:
                 raise ScenarioError(f"{origin} experiment.fmi: the FMI version of the FMUs, 2 or "
                                     f"3, got {value!r}")
             self.fmi = int(value)
+            return
+        if key == "accuracy":
+            self.accuracy = positive(value, f"{origin} experiment.accuracy")
+            return
+        if key == "accept_error":
+            if not isinstance(value, bool):
+                raise ScenarioError(f"{origin} experiment.accept_error: true or false, got "
+                                    f"{value!r}")
+            self.accept_error = value
             return
         if key == "record_every":
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:

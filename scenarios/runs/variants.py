@@ -8,6 +8,7 @@ from sewfmu.scenarios.cosim.master import RunResult, run
 from sewfmu.scenarios.fmu_build.build import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import label_of
+from sewfmu.scenarios.runs import accuracy
 from sewfmu.scenarios.runs.provenance import provenance
 from sewfmu.scenarios.runs.runner import summarize
 
@@ -35,7 +36,11 @@ def run_variants(scenario: Scenario, fmu_dir: Path | None = None,
         report_steps = None if progress is None else \
             (lambda done, total, label=label: progress(label, done, total))
         result = run(sc, paths, report_steps)
-        runs.append((label, result, {**summarize(result), "provenance": provenance(sc, paths)}))
+        summary = summarize(result)
+        found = accuracy.estimate(sc, summary, fmu_dir)
+        if found is not None:
+            summary["coupling_error"] = found
+        runs.append((label, result, {**summary, "provenance": provenance(sc, paths)}))
     return runs
 
 

@@ -1,0 +1,49 @@
+"""Accuracy as an output: each run's estimated coupling error on its key figures (runs/accuracy.py)
+against the error it really has, measured against the independent solution of
+tests/independent/ (which shares no code with sewfmu); a run beyond experiment.accuracy fails
+in one line unless accepted."""
+import json
+from pathlib import Path
+
+import pytest
+
+import sewfmu
+from sewfmu.cli import main
+
+STORED = json.loads((Path(__file__).parent / "independent" / "figures.json").read_text())
+PUNCH = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "F2_peak",
+         "F2_weld_mean")
+
+
+@pytest.mark.parametrize("step", [2.5e-4, 1e-3])
+def test_the_estimate_covers_the_true_coupling_error_of_every_figure(step):
+    run = sewfmu.run("punch_drive", set={"experiment.step": step, "experiment.accept_error": True})
+    estimate = run.summary["coupling_error"]["figures"]
+    exact = STORED["scenarios"]["punch_drive"]["figures"]
+    for name in PUNCH:
+        error = abs(run.summary[name] - exact[name]["value"])
+        assert error <= estimate[name], (name, error, estimate[name])
+        # and not so cautious that it says nothing: within 30 times the true error (or 1e-3)
+        assert estimate[name] <= max(30 * error, 1e-3), (name, error, estimate[name])
+
+
+def test_a_step_just_below_the_stability_limit_fails_in_one_line(tmp_path, capsys):
+    """punch_split with Jacobi at 1.4 ms: F2_weld_mean 35.9 N against 22.8 N, stable but wrong.
+    The run at twice the step diverges: no estimate, the run fails; accepted, it succeeds."""
+    args = ["run", "punch_split", "--set", "experiment.master=jacobi", "--set",
+            "experiment.step=1.4e-3", "--out", str(tmp_path / "a")]
+    assert main(args) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "experiment.accuracy" in err[0] and "accept_error" in err[0]
+    assert (tmp_path / "a" / "summary.json").exists()        # what it gave is kept, and said
+    assert main(args + ["--set", "experiment.accept_error=true"]) == 0
+    with pytest.raises(sewfmu.InaccurateRun) as caught:
+        sewfmu.run("punch_split", set={"experiment.master": "jacobi", "experiment.step": 1.4e-3})
+    assert caught.value.run.figures["F2_weld_mean"] > 30.0
+
+
+def test_a_tighter_accuracy_is_a_setting_of_the_experiment():
+    with pytest.raises(sewfmu.InaccurateRun, match="F2_weld_mean"):
+        sewfmu.run("punch_drive", set={"experiment.step": 1e-3, "experiment.accuracy": 1e-5})
+    with pytest.raises(sewfmu.ScenarioError, match="accept_error"):
+        sewfmu.load("punch_drive", set={"experiment.accept_error": "yes"})
