@@ -1,6 +1,7 @@
 """Shared fixtures: the FMUs built once per test session into a temporary folder, FMI 2.0
 (`fmu_paths`) and FMI 3.0 (`fmu3_paths`); `fmus` gives each in turn, for the tests
-of the FMUs themselves."""
+of the FMUs themselves. The terminal summary says loudly which host tests (other FMI hosts,
+fmuCheck) were skipped, and how to run them."""
 import atexit
 import os
 import shutil
@@ -59,3 +60,33 @@ def _free_test_hosts():
     yield
     from tests.fmu_host import close_all
     close_all()
+
+
+FMUCHECK_HOWTO = (
+    "To run them: take fmuCheck.linux64 (the Modelica FMU Compliance Checker) from",
+    "https://github.com/modelica-tools/FMUComplianceChecker/releases, make it executable, and run",
+    "SEWFMU_FMUCHECK=/path/to/fmuCheck.linux64 .venv/bin/pytest -m interop")
+
+
+def pytest_terminal_summary(terminalreporter):
+    """A skipped host test is a check that did not run: say how many, why, and in red."""
+    skipped = [r for r in terminalreporter.stats.get("skipped", [])
+               if "interop" in r.keywords or "fmucheck" in str(r.longrepr).lower()]
+    if not skipped:
+        return
+    reasons: dict[str, int] = {}
+    for report in skipped:
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+        reason = reason.removeprefix("Skipped: ")
+        reasons[reason] = reasons.get(reason, 0) + 1
+    write = terminalreporter
+    write.write_sep("=", f"{len(skipped)} host tests SKIPPED: they did not run", red=True,
+                    bold=True)
+    for reason, count in sorted(reasons.items(), key=lambda item: -item[1]):
+        write.write_line(f"{count:4d} × {reason}", red=True)
+    if any("fmucheck" in reason.lower() for reason in reasons):
+        given = os.environ.get("SEWFMU_FMUCHECK")
+        write.write_line("SEWFMU_FMUCHECK is unset." if given is None else
+                         f"SEWFMU_FMUCHECK={given!r} is not an executable file.", red=True)
+        for line in FMUCHECK_HOWTO:
+            write.write_line(line, red=True)

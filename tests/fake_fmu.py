@@ -92,6 +92,24 @@ class Integrator(Model):
         return self.x if name == "x" else self.gain * self.u["u"]
 
 
+class Gain(Model):
+    """y = k·u at once: direct feedthrough and no state (a stiff spring's force from its
+    stretch), so y read after a step says when u was set."""
+
+    inputs = ("u",)
+    outputs = ("y",)
+
+    def __init__(self, k: float):
+        super().__init__()
+        self.k = k
+
+    def step(self, t, h):
+        return Status.OK
+
+    def output(self, name):
+        return self.k * self.u["u"]
+
+
 class Switch(Model):
     """A Boolean output `on` that switches when its input u reaches `at`, evaluated on u (as
     a contact switches on the punch's position); also passes u on."""

@@ -17,15 +17,16 @@ def _adaptive(fmu_paths, name="punch_drive", tolerance=None):
 
 
 def test_the_adaptive_master_reaches_the_monolithic_accuracy_target(fmu_paths):
-    """Against a tight monolithic solution: contact onset and loss within 0.002°, F2_peak within
-    0.005 N, F2_weld_mean within 0.002 N (what the monolithic solver gives at rtol 1e-4)."""
+    """Against a tight monolithic solution: the target is contact onset and loss within 0.002°,
+    F2_peak within 0.005 N, F2_weld_mean within 0.002 N (what the monolithic solver gives at rtol
+    1e-4); the bounds are just above what the master gives: 8e-5°, 9.6e-5°, 0.00084 N, 0.00025 N."""
     sc, result = _adaptive(fmu_paths)
     figures = summarize(result)
     tight, _ = monolithic_summary(sc)
-    assert abs(figures["contact_onset_deg"] - tight["contact_onset_deg"]) < 0.002
-    assert abs(figures["contact_loss_deg"] - tight["contact_loss_deg"]) < 0.002
-    assert abs(figures["F2_peak"] - tight["F2_peak"]) < 0.005
-    assert abs(figures["F2_weld_mean"] - tight["F2_weld_mean"]) < 0.002
+    assert abs(figures["contact_onset_deg"] - tight["contact_onset_deg"]) < 2e-4
+    assert abs(figures["contact_loss_deg"] - tight["contact_loss_deg"]) < 2e-4
+    assert abs(figures["F2_peak"] - tight["F2_peak"]) < 0.001
+    assert abs(figures["F2_weld_mean"] - tight["F2_weld_mean"]) < 5e-4
     # non-uniform steps: long between the switches, short around them
     steps = np.diff(result.time)
     assert steps.max() > 2.5 * sc.step and steps.min() <= sc.step / 16 * (1 + 1e-9)
@@ -63,8 +64,9 @@ def test_a_rejected_step_is_rolled_back_bit_for_bit(fmu_paths):
     assert first[2] != inputs[2]                  # the step did move the punch
 
 
-@pytest.mark.parametrize("name, figure, within", [("feed", "phi5_swing_deg", 0.02),
-                                                  ("takeup", "stroke_mm", 0.05)])
+# within: just above the difference measured, 0.0048° and 0.030 mm
+@pytest.mark.parametrize("name, figure, within", [("feed", "phi5_swing_deg", 0.006),
+                                                  ("takeup", "stroke_mm", 0.035)])
 def test_the_adaptive_master_runs_the_one_way_scenarios(fmu_paths, name, figure, within):
     sc = load(name)
     fixed = summarize(run(sc, fmu_paths))

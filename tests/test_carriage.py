@@ -70,8 +70,9 @@ def test_frequencies_bound_a_finite_element_beam_from_above():
     ritz = np.array(CarriageModal(p).omega)
     fe = _fe_frequencies(p)
     assert np.all(ritz >= fe * (1 - 1e-9))       # Rayleigh-Ritz: an upper bound
-    assert ritz[0] == pytest.approx(fe[0], rel=0.02)
-    assert ritz[1] == pytest.approx(fe[1], rel=0.05)
+    # above it by 0.0013 % and 0.53 % (docs/carriage.md: 0.001 % and 0.5 %)
+    assert ritz[0] == pytest.approx(fe[0], rel=2e-5)
+    assert ritz[1] == pytest.approx(fe[1], rel=6e-3)
 
 
 def test_paper_frequencies_are_not_the_models():
@@ -152,7 +153,7 @@ def test_periodic_steady_state_matches_a_frequency_domain_solution():
         H = -model.modal_load[i] / (wi ** 2 - (k * omega) ** 2 + 2j * model.p.zeta * wi * k * omega)
         resp += np.outer(np.array(model.modes)[:, i], H * A)
     U2 = np.fft.irfft(resp[1], n=N)
-    assert np.abs(U[1]).max() == pytest.approx(np.abs(U2).max(), rel=2e-3)
+    assert np.abs(U[1]).max() == pytest.approx(np.abs(U2).max(), rel=3e-4)    # measured: 2.0e-4
 
 
 def test_co_simulation_reaches_the_periodic_steady_state(fmu_paths):
@@ -160,7 +161,8 @@ def test_co_simulation_reaches_the_periodic_steady_state(fmu_paths):
     model, drive = CarriageModal(), CarriageDrive()
     _, U = periodic_response(model, drive, 1600.0)
     assert fig["omega1"] == pytest.approx(model.omega[0])
-    assert fig["peak_abs_U2_last_stitch_um"] == pytest.approx(np.abs(U[1]).max() * 1e6, rel=0.01)
+    # measured: 0.25 % above (docs/carriage.md: within 1 %)
+    assert fig["peak_abs_U2_last_stitch_um"] == pytest.approx(np.abs(U[1]).max() * 1e6, rel=3e-3)
 
 
 def test_resonance_study():

@@ -23,6 +23,10 @@ pytestmark = [pytest.mark.slow, pytest.mark.interop]
 
 FIGURES_DEG = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg")
 FIGURES_N = ("F2_peak", "F2_weld_mean")
+# how far each host's figures may lie from sewfmu's own (°, N): just above what they give.
+# Measured: libcosim 9.5e-5° and 2.4e-6 N, ecos 4e-12° and 6e-13 N, ecos-cli (its CSV has 6
+# decimals) 0.058° (the contact duration) and 4.3e-5 N
+WITHIN = {"libcosim": (2e-4, 1e-5), "ecos": (1e-9, 1e-9), "ecos-cli": (0.07, 1e-4)}
 
 
 @pytest.fixture(autouse=True)
@@ -67,10 +71,11 @@ def test_other_hosts_give_the_same_figures(tmp_path, host, fmi, fmu3_dir):
     rows = {key: (own, other) for key, own, other, _ in
             crosscheck(scenario, host, tmp_path / host)}
     assert rows["n_contacts"][0] == rows["n_contacts"][1] == 1
+    degrees, newtons = WITHIN[host]
     for key in FIGURES_DEG:
-        assert abs(rows[key][0] - rows[key][1]) < 1.0, (key, rows[key])
+        assert abs(rows[key][0] - rows[key][1]) < degrees, (key, rows[key])
     for key in FIGURES_N:
-        assert abs(rows[key][0] - rows[key][1]) < 0.3, (key, rows[key])
+        assert abs(rows[key][0] - rows[key][1]) < newtons, (key, rows[key])
     assert (tmp_path / host / "results.csv").exists() and (tmp_path / host / "summary.json").exists()
 
 

@@ -6,15 +6,22 @@ z' = M z), each extrapolating its input over a step from its rate. Jacobi then t
 order Taylor step, z ← (I + hM + h²M²/2) z; the iterative master, converged, the trapezoidal rule,
 z ← (I - hM/2)⁻¹ (I + hM/2) z, which keeps |z| = 1.
 """
+import dataclasses
+
 import numpy as np
 import pytest
 
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
 from sewfmu.scenarios.cosim.master import Master
-from sewfmu.scenarios.format.master_settings import SETTINGS
+from sewfmu.scenarios.format.master_settings import (
+    SETTINGS,
+    AdaptiveSettings,
+    IterativeSettings,
+    SettingError,
+)
 from sewfmu.scenarios.format.values import ScenarioError
-from tests.fake_fmu import Failing, Integrator, Switch, fake_scenario, maker
+from tests.fake_fmu import Failing, Gain, Integrator, Switch, fake_scenario, maker
 
 M = np.array([[0.0, 1.0], [-1.0, 0.0]])
 LOOP = ["b.x -> a.u", "b.x_dot -> a.u_dot", "a.x -> b.u", "a.x_dot -> b.u_dot"]
@@ -75,6 +82,51 @@ def test_gauss_seidel_refuses_a_loop_and_matches_jacobi_along_a_chain():
     assert np.array_equal(results["jacobi"]["b.x"], results["gauss-seidel"]["b.x"])
 
 
+# A chain through a direct feedthrough: a integrates 1 (a.x = t), g passes y = 2·u on at once, c
+# integrates g.y held over each step (c.u_dot = 0). What c sees depends on the exchange's order.
+H = 0.125
+CHAIN = ["a.x -> g.u", "g.y -> c.u"]
+
+
+def feedthrough_chain(master: str, **experiment):
+    models = {"a": Integrator(), "g": Gain(k=2.0), "c": Integrator()}
+    sc = fake_scenario(models, CHAIN, 1.0, H, master, **experiment,
+                       parameters={"a": {"u": 1.0, "u_dot": 0.0}, "c": {"u_dot": 0.0}})
+    return Master(sc, {}, make_instance=maker(models)).run()
+
+
+def test_the_order_of_the_exchange_decides_what_a_feedthrough_chain_computes():
+    jacobi, gauss_seidel = feedthrough_chain("jacobi"), feedthrough_chain("gauss-seidel")
+    t = jacobi.time
+    assert np.array_equal(t, gauss_seidel.time) and len(t) == 9
+    # Jacobi: after the step g's input is set from a.x(t + h) and g.y read after that, so c steps
+    # from c.u = 2t: c.x(nh) = h·Σ_{k<n} 2kh = t·(t - h)
+    assert jacobi["g.y"] == pytest.approx(2 * t, abs=1e-12)
+    assert jacobi["c.x"] == pytest.approx(t * (t - H), abs=1e-12)
+    # Gauss–Seidel sweeps consumers first: g takes a.x as it was before a's step (one step old),
+    # c takes g.y before g's step (two steps old): c.x(nh) = h·Σ_{0<k<n} 2(k - 1)h
+    assert gauss_seidel["g.y"] == pytest.approx(2 * np.maximum(t - H, 0.0), abs=1e-12)
+    assert gauss_seidel["c.x"] == pytest.approx(np.where(t > 0, (t - H) * (t - 2 * H), 0.0),
+                                                abs=1e-12)
+    assert jacobi["c.x"][-1] - gauss_seidel["c.x"][-1] == pytest.approx(0.875 - 0.65625)
+    # (the chain of two integrators above, whose rate is exchanged too, does not tell them apart)
+
+
+@pytest.mark.parametrize("master", ["jacobi", "iterative", "adaptive"])
+def test_a_feedthrough_output_is_read_after_its_inputs_are_set(master):
+    """The contract (components/slave.py): outputs read after inputs were set reflect those
+    inputs. Every master that exchanges the Jacobi way records g.y = 2·a.x at every point, also
+    at the adaptive master's uneven steps; reading g.y before setting g.u would give 2·a.x of the
+    step before."""
+    result = feedthrough_chain(master)
+    t = result.time
+    assert result["a.x"] == pytest.approx(t, abs=1e-12)
+    assert result["g.y"] == pytest.approx(2 * t, abs=1e-12)
+    # and c stepped from that g.y: each step integrates 2·(the step's start)
+    integral = np.concatenate([[0.0], np.cumsum(np.diff(t) * 2 * t[:-1])])
+    assert result["c.x"] == pytest.approx(integral, abs=1e-12)
+
+
 def test_the_adaptive_master_grows_its_steps_brackets_a_switch_and_rolls_back_exactly():
     models = {"a": Integrator(), "s": Switch(at=0.3)}
     sc = fake_scenario(models, ["a.x -> s.u", "a.x_dot -> s.u_dot"], 1.0, 0.01, "adaptive",
@@ -117,11 +169,15 @@ def test_a_saved_point_is_come_back_to_exactly():
         for _ in range(3):
             run.step()
         snapshot = run.save_state()
+        saved = {i.name: (list(i.in_buf), list(i.out_buf), i.model.x) for i in run.instances}
         for _ in range(4):
             run.step()
         first = run.result()
         run.restore_state(snapshot)
         assert run.k == 3 and len(run.result().time) == 4
+        # every FMU's state, the inputs the master had set and the outputs read, as saved
+        assert {i.name: (list(i.in_buf), list(i.out_buf), i.model.x)
+                for i in run.instances} == saved
         for _ in range(4):
             run.step()
         again = run.result()
@@ -146,8 +202,22 @@ def test_a_tolerance_the_master_cannot_honour_is_refused_in_one_line():
         oscillator("adaptive", tolerance=1.0, tolerance_master="adaptive")
 
 
-def test_every_master_has_its_settings_class():
+def test_every_master_has_its_settings_class_with_the_documented_defaults():
     assert set(ALGORITHMS) == set(SETTINGS)
     for name, algorithm in ALGORITHMS.items():
-        assert algorithm.Settings is SETTINGS[name]
-        assert algorithm.Settings()            # the defaults are valid
+        assert algorithm.Settings is SETTINGS[name] and algorithm.name == name
+    # the defaults docs/running.md gives, each within the range its master honours
+    defaults = {name: dataclasses.asdict(cls()) for name, cls in SETTINGS.items()}
+    assert defaults == {"jacobi": {}, "gauss-seidel": {},
+                        "iterative": {"tolerance": 1e-6, "acceleration": "aitken"},
+                        "adaptive": {"tolerance": 1e-5}}
+    for cls in (IterativeSettings, AdaptiveSettings):
+        low, high = cls.TOLERANCES
+        assert low <= cls().tolerance <= high
+        assert cls(tolerance=low).tolerance == low and cls(tolerance=high).tolerance == high
+        for outside in (low / 2, high * 2):
+            with pytest.raises(SettingError, match=rf"^experiment\.tolerance = {outside:g}: "
+                                                   rf"the {cls.master} master honours"):
+                cls(tolerance=outside)
+    with pytest.raises(SettingError, match=r"^experiment\.acceleration = 'newton': one of"):
+        IterativeSettings(acceleration="newton")

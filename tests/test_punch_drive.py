@@ -30,10 +30,13 @@ def test_summary_figures_match_the_monolithic_solution(fmu_paths, monolithic, ma
     sc.master = master
     figures = summarize(run(sc, fmu_paths))
     assert figures["n_contacts"] == monolithic["n_contacts"] == 1
-    for key in ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg"):
-        assert abs(figures[key] - monolithic[key]) < 1.0, key
-    for key in ("F2_peak", "F2_weld_mean"):
-        assert abs(figures[key] - monolithic[key]) < 0.3, key
+    # just above what the code gives (both masters alike): onset +0.044°, loss +0.005°, duration
+    # -0.039°, F2_peak -0.0003 N, F2_weld_mean -0.0012 N (docs/punch_drive.md: within 0.04° and
+    # 0.002 N)
+    for key, within in (("contact_onset_deg", 0.05), ("contact_loss_deg", 0.01),
+                        ("contact_duration_deg", 0.05), ("F2_peak", 0.001),
+                        ("F2_weld_mean", 0.002)):
+        assert abs(figures[key] - monolithic[key]) < within, (key, figures[key] - monolithic[key])
     # the paper: at ω = 100 s⁻¹ the pressing force during welding is practically constant, ≈ 22 N
     assert 20.0 < figures["F2_weld_mean"] < 25.0
 

@@ -35,27 +35,36 @@ def _errors(sc, result):
                                                      "F2_peak", "F2_weld_mean")}
 
 
-@pytest.mark.parametrize("omega", [100.0, 300.0])
-def test_punch_split_gives_the_monolithic_figures_with_its_own_master(fmu_paths, omega):
-    """The target: within 0.1° of the contact angles and 0.01 N of F2_weld_mean."""
+# the bounds just above what the code gives (measured errors in the comments)
+@pytest.mark.parametrize("omega, bounds", [
+    (100.0, {"contact_onset_deg": 0.005, "contact_loss_deg": 0.005,      # 0.0026°, 0.0033°
+             "F2_peak": 0.001, "F2_weld_mean": 0.005}),                  # 0.0002 N, 0.0037 N
+    (300.0, {"contact_onset_deg": 0.1, "contact_loss_deg": 0.02,         # 0.078°, 0.016°
+             "F2_peak": 1.0, "F2_weld_mean": 0.005}),                    # 0.82 N, 0.0038 N
+])
+def test_punch_split_gives_the_monolithic_figures_with_its_own_master(fmu_paths, omega, bounds):
+    """The target: within 0.1° of the contact angles and 0.01 N of F2_weld_mean (met with room
+    to spare: the bounds are what the code gives)."""
     sc, result = _split(fmu_paths, shaft__omega0=omega)
     assert sc.master == "adaptive"
     err = _errors(sc, result)
-    assert err["contact_onset_deg"] < 0.1 and err["contact_loss_deg"] < 0.1
-    assert err["F2_weld_mean"] < 0.01 and err["F2_peak"] < (0.01 if omega == 100.0 else 1.5)
+    assert all(err[key] < bound for key, bound in bounds.items()), err
 
 
 def test_punch_split_with_jacobi_at_the_default_step(fmu_paths):
     sc, result = _split(fmu_paths, master="jacobi")
     err = _errors(sc, result)
-    assert err["contact_onset_deg"] < 0.1 and err["contact_loss_deg"] < 0.1
-    assert err["F2_weld_mean"] < 0.01 and err["F2_peak"] < 0.1
+    # measured: 0.0038°, 0.0007°, 0.0027 N, F2_peak 0.089 N
+    assert err["contact_onset_deg"] < 0.005 and err["contact_loss_deg"] < 0.002, err
+    assert err["F2_weld_mean"] < 0.004 and err["F2_peak"] < 0.1, err
 
 
+# angle: onset and loss, force: F2_weld_mean, just above what the code gives (measured: 0.0035°
+# and 0.059 N; 0.018° and 0.0039 N; 0.0042° and 0.0019 N)
 @pytest.mark.parametrize("settings, step, angle, force", [
-    ({"shaft__omega0": 300.0}, 4e-5, 0.02, 0.1),         # the same crank angle per step as below
-    ({"fabric__c2": 2.0e5}, 2.5e-4, 0.1, 0.01),          # a fabric four times as stiff
-    ({"shaft__omega0": 100.0, "body__F30": 10.0}, 2.5e-4, 0.1, 0.01),
+    ({"shaft__omega0": 300.0}, 4e-5, 0.005, 0.07),       # the same crank angle per step as below
+    ({"fabric__c2": 2.0e5}, 2.5e-4, 0.02, 0.005),        # a fabric four times as stiff
+    ({"shaft__omega0": 100.0, "body__F30": 10.0}, 2.5e-4, 0.005, 0.0025),
 ])
 def test_punch_split_follows_the_monolithic_solution_elsewhere(fmu_paths, settings, step, angle,
                                                                force):
@@ -68,7 +77,7 @@ def test_punch_split_follows_the_monolithic_solution_elsewhere(fmu_paths, settin
 def test_the_iterative_master_converges_and_agrees(fmu_paths):
     sc, result = _split(fmu_paths, master="iterative")
     err = _errors(sc, result)
-    assert err["contact_onset_deg"] < 0.1 and err["F2_weld_mean"] < 0.01
+    assert err["contact_onset_deg"] < 0.03 and err["F2_weld_mean"] < 0.002, err   # 0.025°, 0.0015 N
     # one pass out of contact, a few in it; a step that did not converge is in the log
     assert 1.0 < result.coupling["iterations_per_step"] < 4.0
     warnings = [line for line in result.log if "did not converge" in line]
@@ -87,7 +96,7 @@ def test_plain_jacobi_diverges_where_the_iterative_master_stays_stable(fmu_paths
         _split(fmu_paths, master="jacobi", step=2e-3)
     sc, iterative = _split(fmu_paths, master="iterative", step=2e-3)
     assert np.max(iterative["fabric.F2"]) < 100.0
-    assert _errors(sc, iterative)["F2_weld_mean"] < 0.3
+    assert _errors(sc, iterative)["F2_weld_mean"] < 0.15         # measured: 0.12 N
 
 
 @pytest.mark.parametrize("acceleration", ["aitken", "iqn-ils"])

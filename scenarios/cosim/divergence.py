@@ -42,9 +42,18 @@ def declared_bound(text) -> float | None:
 class DivergenceWatch:
     """Watches the inputs of the FMUs on feedback loops (Instance objects of cosim/instances.py)."""
 
-    def __init__(self, loop_instances, step: float):
+    def __init__(self, loop_instances, step: float, explicit: bool = True,
+                 parameters: dict[str, dict] | None = None):
+        """`explicit`: the master couples the loop explicitly (Jacobi, Gauss-Seidel), so a
+        signal that runs away may be its instability; otherwise (iterative, adaptive) it is the
+        mechanism's. `parameters`: the values the scenario sets, by instance, to name them."""
         self.step = step
+        self.explicit = explicit
         self.names = ", ".join(u.name for u in loop_instances)
+        self.given = ", ".join(f"{u.name}.{k} = {v:g}" if isinstance(v, float) else
+                               f"{u.name}.{k} = {v}"
+                               for u in loop_instances
+                               for k, v in (parameters or {}).get(u.name, {}).items())
         self.signals = []            # (instance, index in in_buf, input name, source text, lo, hi, unit)
         for inst in loop_instances:
             for k, (name, src, out) in enumerate(inst.inputs):
@@ -65,8 +74,8 @@ class DivergenceWatch:
             if (lo is not None and value < lo) or (hi is not None and value > hi) \
                     or not math.isfinite(value):
                 self._raise(t, f"{inst.name}.{name} = {value:.6g} {unit} (from {source}) "
-                               f"left its declared range [{bound_text(lo, '-inf')}, {bound_text(hi, 'inf')}] "
-                               f"{unit}")
+                               f"left its declared range [{bound_text(lo, '-inf')}, "
+                               f"{bound_text(hi, 'inf')}] {unit}", out_of_range=True)
             magnitude = abs(value)
             if magnitude > self.window_max[j]:
                 self.window_max[j] = magnitude
@@ -82,7 +91,18 @@ class DivergenceWatch:
                                f"in {WINDOW} steps, {STREAK} times in a row (now {now:.3g})")
             self.previous[j], self.window_max[j] = now, 0.0
 
-    def _raise(self, t: float, what: str) -> None:
+    def _raise(self, t: float, what: str, out_of_range: bool = False) -> None:
+        given = f" (set here: {self.given})" if self.given else ""
+        if not self.explicit:
+            raise Diverged(f"at t = {t:.6g} s {what}: the mechanism goes beyond what its FMUs "
+                           f"declare, with the coupling of ({self.names}) converged at every "
+                           f"step: a parameter drives it there{given}")
+        if out_of_range:
+            raise Diverged(f"the co-simulation diverged at t = {t:.6g} s: {what}: either the "
+                           f"explicit coupling of the feedback loop ({self.names}) is unstable at "
+                           f"a step of {self.step:.6g} s (a shorter experiment.step, or "
+                           f"experiment.master = \"iterative\" or \"adaptive\", tells), or a "
+                           f"parameter drives the mechanism there{given}")
         raise Diverged(f"the co-simulation diverged at t = {t:.6g} s: {what}; the explicit "
                        f"coupling of the feedback loop ({self.names}) is unstable at a step of "
                        f"{self.step:.6g} s: take a shorter experiment.step, or "

@@ -163,7 +163,11 @@ class Master:
             # around a loop the first instance initialized took its partners' outputs before
             # they had any: each takes them again now, as at the end of a step
             system.settle_loops()
-        self.watch = DivergenceWatch(system.in_loops, self.h) if system.in_loops else None
+        explicit = not (algorithm.rolls_back or algorithm.variable_step)
+        self.watch = DivergenceWatch(
+            system.in_loops, self.h, explicit,
+            {name: inst.parameters for name, inst in sc.instances.items()}) \
+            if system.in_loops else None
         algorithm.start(system, sc.step)
         # record_every thins the records, but every step is kept from one step before the last
         # whole revolution on (the analyses' window; a scenario without a shaft has none, and
