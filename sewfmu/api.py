@@ -185,9 +185,7 @@ class Sweep:
 
     def to_pandas(self):
         """The rows as a pandas DataFrame (pandas must be installed)."""
-        import pandas as pd  # optional extra (pandas)
-
-        return pd.DataFrame(self.rows).drop(columns=["key"], errors="ignore")
+        return _pandas().DataFrame(self.rows).drop(columns=["key"], errors="ignore")
 
     def __repr__(self) -> str:
         return (f"<sewfmu.Sweep {self.name}: {len(self.rows)} points over "
@@ -345,10 +343,23 @@ def build(fmi: int = 2, dest: str | Path | None = None,
     return [build_fmu(name, folder, fmi=fmi) for name in (names or list(FMUS))]
 
 
-def _frame(series, index: str):
-    import pandas as pd  # optional extra (pandas)
+def _pandas():
+    """pandas, or one line that says how to install it."""
+    try:
+        import pandas  # optional extra (pandas)
+    except ModuleNotFoundError:
+        from sewfmu.console import install_command  # only to say how to install it
 
-    return pd.DataFrame(series).set_index(index)
+        raise MissingExtra(f"to_pandas() needs pandas: {install_command('pandas')}") from None
+    return pandas
+
+
+class MissingExtra(Error, ModuleNotFoundError):
+    """An optional package that a call needs is not installed."""
+
+
+def _frame(series, index: str):
+    return _pandas().DataFrame(series).set_index(index)
 
 
 def _short(value) -> str:

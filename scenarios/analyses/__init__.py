@@ -155,9 +155,22 @@ def module(analysis: str) -> ModuleType:
     return importlib.import_module(f"{__name__}.{analysis}")
 
 
+class MissingRecord(Error, KeyError):
+    """A figure or a picture needs a column the run did not record."""
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
 def column(result, role: str, variable: str):
     """The recorded column of the instance that plays `role` in the result's scenario."""
-    return result[f"{result.scenario.roles[role]}.{variable}"]
+    name = f"{result.scenario.roles[role]}.{variable}"
+    try:
+        return result[name]
+    except KeyError:
+        raise MissingRecord(f"{result.scenario.name}: this needs {name}, which the run did not "
+                            f"record (add it to the scenario's record list, or leave record out "
+                            f"to record every output)") from None
 
 
 def parameters(result, role: str) -> dict:

@@ -164,7 +164,9 @@ def plot(curves, path, title: str) -> None:
         deg = np.degrees(phi[mask] - whole_revolution(float(phi[-1]))[0])
         ax_y.plot(deg, signal(result, "y")[mask] * 1e3, label=label)
         ax_f.plot(deg, signal(result, "F2")[mask], label=label)
-    ax_y.plot(deg, column(result, "linkage", "xi")[mask] * 1e3, "k:", lw=1, label="ξ (slider)")
+    if f"{result.scenario.roles['linkage']}.xi" in result.columns:   # the slider, if recorded
+        ax_y.plot(deg, column(result, "linkage", "xi")[mask] * 1e3, "k:", lw=1,
+                  label="ξ (slider)")
     ax_y.axhline(0.0, color="0.6", lw=0.8)
     ax_y.set_ylabel("punch height y [mm]")
     ax_f.set_ylabel("fabric force F2 [N]")

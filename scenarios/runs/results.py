@@ -4,6 +4,7 @@ in one piece (files.outputs.replacing); run_scenario and run_study run and write
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -55,19 +56,32 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
             write_json(own, where / "summary.json")
             if (animate or report) and animations.can_animate(scenario):
                 gif = where / f"{scenario.name}.gif"
-                animations.animate(result, gif)
-                pictures.append((f"the mechanism moving{', ' + label if label else ''} "
-                                 f"(last revolution, recorded run)", gif))
+                if _drawn(lambda: animations.animate(result, gif), "the animation"):
+                    pictures.append((f"the mechanism moving{', ' + label if label else ''} "
+                                     f"(last revolution, recorded run)", gif))
         if scenario.compare:
             write_json(summary, staging / "summary.json")
         if (plot or report) and scenario.analysis:
             curves = [(label or scenario.name, result) for label, result, _ in runs]
             png = staging / f"{scenario.name}.png"
-            analyses.module(scenario.analysis).plot(curves, png, scenario.description)
-            pictures.insert(0, ("key curves of the last revolution", png))
+            if _drawn(lambda: analyses.module(scenario.analysis).plot(curves, png,
+                                                                       scenario.description),
+                      "the plot"):
+                pictures.insert(0, ("key curves of the last revolution", png))
         if report:
             from sewfmu.scenarios.runs.report import run_report  # only with --report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
+
+
+def _drawn(draw, what: str) -> bool:
+    """Draw a picture; one that needs a column the run did not record is left out with a
+    warning line naming it, and the rest is written."""
+    try:
+        draw()
+    except analyses.MissingRecord as err:
+        warnings.warn(f"{what} is left out: {err}", stacklevel=2)
+        return False
+    return True
 
 
 def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
