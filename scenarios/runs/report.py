@@ -177,6 +177,18 @@ def run_report(path: Path, scenario, runs: list[tuple], pictures: list[tuple[str
                   [[k, *(own.get(k) for _, _, own in runs), units.get(k, "")] for k in keys],
                   numeric=set(range(1, len(runs) + 1)))
     sections.append(figures)
+    for label, _, own in runs:                # the estimated coupling error of each figure
+        found = own.get("coupling_error")
+        if not found:
+            continue
+        errors = Section("Estimated coupling error" + (f", {label}" if label else ""))
+        if found.get("failed"):
+            errors.table(["method", "no estimate"], [[found["method"], found["failed"]]])
+        else:
+            errors.table(["figure", f"± (from {found['method']})", "unit"],
+                         [[k, e, units.get(k, "")] for k, e in found["figures"].items()],
+                         numeric={1})
+        sections.append(errors)
     for label, rows in against_monolithic.items():
         sections.append(comparison_section(
             rows, "Against the monolithic solution (one ODE, DOP853, rtol 1e-8)"
