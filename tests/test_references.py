@@ -182,7 +182,13 @@ def test_the_modelica_reference_fmus_pass_against_what_they_carry():
             reference_check.describe(fmu)
         except ScenarioError:                       # Clocks: no co-simulation interface
             continue
-        if reference_check.fmu_reference.read_carried(fmu) is None:
+        try:
+            if reference_check.fmu_reference.read_carried(fmu) is None:
+                continue
+        except ScenarioError as err:
+            # StateSpace's output is an array (cells of several numbers): nothing sewfmu can
+            # compare, refused rather than passed (docs/regression.md)
+            assert "no column of numbers beside time" in str(err), str(err)
             continue
         outcomes = reference_check.check(fmu, rtol=1e-6)
         assert all(not o.deviations for o in outcomes), [str(d) for o in outcomes

@@ -13,12 +13,16 @@ A check runs the FMU as the reference was made (its time grid, its inputs) and c
 variable of the reference: a variable deviates where |value - reference| exceeds
 atol + rtol · (largest |reference| of that variable), and the first such time is reported with
 both values. An FMU is judged by its outputs, whatever its version or build hash says.
+
+Every file read, and every name or number taken from inside an FMU, is checked as user input
+first (reference_files.py): one line naming the file and what is wrong, never a run that fails
+without saying why, runs for ever, or writes outside the folder given.
 """
 from __future__ import annotations
 
 import csv
-import io
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree as ET
@@ -26,6 +30,15 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.references.reference_files import (
+    check_experiment,
+    inside,
+    number,
+    parse_csv,
+    plain_name,
+    read_options,
+    shown,
+)
 
 LS_REF = "extra/org.fmi-standard.fmi-ls-ref"
 MANIFEST = f"{LS_REF}/fmi-ls-manifest.xml"
@@ -72,39 +85,6 @@ class Deviation:
 
 
 # --- reading ----------------------------------------------------------------------------------
-def _number(text: str) -> float:
-    lowered = text.strip().lower()
-    if lowered in ("true", "false"):
-        return 1.0 if lowered == "true" else 0.0
-    return float(text)
-
-
-def parse_csv(text: str) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Columns of a result CSV as numbers (Booleans as 0/1), and the columns that are not
-    numbers (left out)."""
-    rows = list(csv.reader(io.StringIO(text)))
-    if not rows or rows[0][0].strip().strip('"') != "time":
-        raise ScenarioError("a reference CSV starts with a header whose first column is time")
-    header = [h.strip().strip('"') for h in rows[0]]
-    columns, skipped = {}, []
-    for j, name in enumerate(header):
-        try:
-            columns[name] = np.array([_number(r[j]) for r in rows[1:] if len(r) > j])
-        except ValueError:
-            skipped.append(name)
-    if "time" not in columns or len(columns["time"]) == 0:
-        raise ScenarioError("a reference CSV needs rows with a number in its time column")
-    return columns, skipped
-
-
-def _parsed(text: str, where) -> tuple[dict[str, np.ndarray], list[str]]:
-    try:
-        return parse_csv(text)
-    except (ScenarioError, IndexError) as err:
-        raise ScenarioError(f"{where}: {err or 'a row has fewer columns than the header'}") \
-            from None
-
-
 def _table(columns: dict[str, np.ndarray]) -> np.ndarray:
     table = np.zeros(len(columns["time"]), dtype=[(n, float) for n in columns])
     for name, values in columns.items():
@@ -112,35 +92,46 @@ def _table(columns: dict[str, np.ndarray]) -> np.ndarray:
     return table
 
 
-def read_options(path: Path) -> dict[str, float]:
-    return {k.strip(): float(v) for k, v in (line.split(",", 1) for line in
-                                             path.read_text().splitlines() if line.strip())}
-
-
 def cross_check_folder(refs: Path, model: str) -> Path:
     """Where a model's reference lives in a Cross-Check folder: refs/<Model>/, or refs itself
     when it holds <Model>_ref.csv directly."""
     refs = Path(refs)
+    model = plain_name(model, refs)
     return refs if (refs / f"{model}_ref.csv").is_file() else refs / model
 
 
 def read_cross_check(refs: Path, model: str) -> Reference | None:
+    """The reference recorded in refs for the model, every file checked (reference_files.py);
+    None if there is none."""
     folder = cross_check_folder(refs, model)
     result = folder / f"{model}_ref.csv"
     if not result.is_file():
         return None
-    columns, skipped = _parsed(result.read_text(), result)
+    columns, skipped = parse_csv(result.read_bytes(), result)
     opt = folder / f"{model}_ref.opt"
     options = read_options(opt) if opt.is_file() else {}
     times = columns["time"]
     inputs_file = folder / f"{model}_in.csv"
-    inputs = _table(_parsed(inputs_file.read_text(), inputs_file)[0]) \
+    inputs = _table(parse_csv(inputs_file.read_bytes(), inputs_file, inputs=True)[0]) \
         if inputs_file.is_file() else None
     experiment = Experiment(options.get("StartTime", float(times[0])),
                             options.get("StopTime", float(times[-1])),
                             options.get("StepSize", _grid_step(times)), inputs,
                             options.get("RelTol", DEFAULT_RTOL))
+    check_experiment(f"{opt} (with {result.name})" if opt.is_file() else result,
+                     experiment.start, experiment.stop, experiment.step, experiment.rel_tol, times)
     return Reference(model, str(result), columns, experiment, skipped)
+
+
+def _attribute(fmu: Path, name: str, text) -> float | None:
+    """A DefaultExperiment attribute (fmpy gives the XML's text), None where it is not given."""
+    if text is None or not str(text).strip():
+        return None
+    value = number(str(text))
+    if value is None:
+        raise ScenarioError(f"{fmu}: modelDescription.xml: DefaultExperiment {name}="
+                            f"{shown(str(text))}; a number")
+    return value
 
 
 def read_carried(fmu: Path) -> Reference | None:
@@ -148,23 +139,34 @@ def read_carried(fmu: Path) -> Reference | None:
     carries none."""
     from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
-    with zipfile.ZipFile(fmu) as archive:
-        if MANIFEST not in archive.namelist():
-            return None
-        root = ET.fromstring(archive.read(MANIFEST))
-        sources = [r.get("source") for r in root.iter() if r.tag.endswith("Related")
-                   and r.get("role") == "result" and (r.get("type") or "text/csv") == "text/csv"]
-        if not sources or f"{LS_REF}/{sources[0]}" not in archive.namelist():
-            return None
-        text = archive.read(f"{LS_REF}/{sources[0]}").decode("utf-8")
+    try:
+        with zipfile.ZipFile(fmu) as archive:
+            if MANIFEST not in archive.namelist():
+                return None
+            root = ET.fromstring(archive.read(MANIFEST))
+            sources = [r.get("source") for r in root.iter() if r.tag.endswith("Related")
+                       and r.get("role") == "result"
+                       and (r.get("type") or "text/csv") == "text/csv"]
+            if not sources or f"{LS_REF}/{sources[0]}" not in archive.namelist():
+                return None
+            raw = archive.read(f"{LS_REF}/{sources[0]}")
+    except ET.ParseError as err:
+        raise ScenarioError(f"{fmu}: {MANIFEST}: not XML ({err})") from None
+    except (zipfile.BadZipFile, zlib.error, EOFError, OSError) as err:
+        raise ScenarioError(f"{fmu}: its reference cannot be read from the archive "
+                            f"({' '.join(str(err).split())})") from None
+    where = f"{fmu}: {shown(sources[0], 80)}"
+    columns, skipped = parse_csv(raw, where)
     md = read_model_description(str(fmu), validate=False)
-    columns, skipped = _parsed(text, f"{fmu}: {sources[0]}")
     times = columns["time"]
     default = md.defaultExperiment
-    step = float(default.stepSize) if default is not None and default.stepSize else \
-        _grid_step(times)
-    return Reference(md.modelName, f"{fmu.name} ({sources[0]}, fmi-ls-ref)", columns,
-                     Experiment(float(times[0]), float(times[-1]), step), skipped)
+    step = _attribute(fmu, "stepSize", default.stepSize if default is not None else None)
+    experiment = Experiment(float(times[0]), float(times[-1]),
+                            _grid_step(times) if step is None else step)
+    check_experiment(f"{where} with the DefaultExperiment's stepSize", experiment.start,
+                     experiment.stop, experiment.step, experiment.rel_tol, times)
+    return Reference(md.modelName, f"{fmu.name} ({sources[0]}, fmi-ls-ref)", columns, experiment,
+                     skipped)
 
 
 def _grid_step(times: np.ndarray) -> float:
@@ -221,14 +223,29 @@ def compare(model: str, got: dict, reference: Reference, rtol: float | None = No
             deviations.append(Deviation(model, name, why="the FMU has no such variable now"))
             continue
         value = got[name] if same_grid else np.interp(t_ref, t_got, got[name])
-        allowed = atol + rtol * float(np.max(np.abs(expected))) if len(expected) else atol
-        off = np.abs(value - expected) > allowed
-        off |= np.isnan(value) != np.isnan(expected)
-        if np.any(off):
+        if np.any(off := _off(value, expected, rtol, atol)):
+            allowed = _allowed(expected, rtol, atol)
             k = int(np.argmax(off))
             deviations.append(Deviation(model, name, float(t_ref[k]), float(value[k]),
                                         float(expected[k]), allowed))
     return deviations
+
+
+def _allowed(expected: np.ndarray, rtol: float, atol: float) -> float:
+    # the scale is the largest finite |reference|: one nan or inf in the reference would make
+    # the tolerance nan or inf, and then no difference anywhere would exceed it
+    finite = expected[np.isfinite(expected)]
+    return atol + rtol * (float(np.max(np.abs(finite))) if len(finite) else 0.0)
+
+
+def _off(value: np.ndarray, expected: np.ndarray, rtol: float, atol: float) -> np.ndarray:
+    """Where the value leaves the tolerance. A nan or inf of the reference is a value to
+    reproduce: only nan matches nan, only the same inf matches inf (a nan of the reference where
+    the FMU gives a number is a deviation, not a gap in the comparison)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        differs = np.abs(value - expected) > _allowed(expected, rtol, atol)
+        same = (value == expected) | (np.isnan(value) & np.isnan(expected))
+    return np.where(np.isfinite(value) & np.isfinite(expected), differs, ~same)
 
 
 def run_and_compare(fmu: Path, reference: Reference, rtol: float | None = None,
@@ -251,16 +268,20 @@ def default_experiment(fmu: Path) -> Experiment:
 
     md = read_model_description(str(fmu), validate=False)
     default = md.defaultExperiment
-    start = float(default.startTime) if default is not None and default.startTime else 0.0
-    stop = float(default.stopTime) if default is not None and default.stopTime else 1.0
-    step = float(default.stepSize) if default is not None and default.stepSize else \
-        (stop - start) / 500
+    given = {name: _attribute(fmu, name, getattr(default, name, None))
+             for name in ("startTime", "stopTime", "stepSize")}
+    start = 0.0 if given["startTime"] is None else given["startTime"]
+    stop = 1.0 if given["stopTime"] is None else given["stopTime"]
+    step = (stop - start) / 500 if given["stepSize"] is None else given["stepSize"]
+    # the numbers come from inside the FMU: a stopTime of 1e12 would run for ever
+    check_experiment(f"{fmu}: modelDescription.xml: DefaultExperiment", start, stop, step,
+                     DEFAULT_RTOL)
     return Experiment(start, stop, step)
 
 
 def write_csv(path: Path, columns: dict[str, np.ndarray]) -> None:
     names = list(columns)
-    with open(path, "w", newline="") as out:
+    with open(path, "w", newline="", encoding="utf-8") as out:
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(names)
         for row in zip(*(columns[n] for n in names)):
@@ -273,19 +294,31 @@ def record(fmu: Path, refs: Path, experiment: Experiment | None = None,
     refs/<Model>/ in the Cross-Check layout."""
     from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
-    model = model or read_model_description(str(fmu), validate=False).modelName
+    # the modelName is data from inside the FMU, never a path: a plain name, and every file
+    # checked to stay inside refs before anything runs or is written
+    refs = Path(refs)
+    model = plain_name(model or read_model_description(str(fmu), validate=False).modelName, fmu)
     experiment = experiment or default_experiment(fmu)
+    check_experiment(f"{fmu}: the run to record", experiment.start, experiment.stop,
+                     experiment.step, experiment.rel_tol)
+    folder = inside(refs, refs / model, fmu)
+    result, inputs, options = (inside(refs, folder / f"{model}{suffix}", fmu)
+                               for suffix in ("_ref.csv", "_in.csv", "_ref.opt"))
     got = simulate(fmu, experiment)
-    folder = Path(refs) / model
     folder.mkdir(parents=True, exist_ok=True)
-    write_csv(folder / f"{model}_ref.csv", got)
+    write_csv(result, got)
     if experiment.inputs is not None:
-        write_csv(folder / f"{model}_in.csv",
-                  {n: experiment.inputs[n] for n in experiment.inputs.dtype.names})
-    (folder / f"{model}_ref.opt").write_text(
-        f"StartTime, {experiment.start!r}\nStopTime, {experiment.stop!r}\n"
-        f"StepSize, {experiment.step!r}\nRelTol, {experiment.rel_tol!r}\n")
+        write_csv(inputs, {n: experiment.inputs[n] for n in experiment.inputs.dtype.names})
+    options.write_text(f"StartTime, {experiment.start!r}\nStopTime, {experiment.stop!r}\n"
+                       f"StepSize, {experiment.step!r}\nRelTol, {experiment.rel_tol!r}\n",
+                       encoding="utf-8")
     return folder
+
+
+def plot_file(folder: Path, model: str, where) -> Path:
+    """Where the picture of a model's deviations goes: inside `folder`, whatever the modelName
+    (from inside the FMU) says."""
+    return inside(folder, Path(folder) / f"{plain_name(model, where)}_differences.png", where)
 
 
 def plot(fmu_name: str, got: dict, reference: Reference, deviations: list[Deviation],

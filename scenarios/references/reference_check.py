@@ -16,6 +16,7 @@ from pathlib import Path
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.references import fmu_reference, regression
 from sewfmu.scenarios.references.fmu_reference import Deviation, Reference
+from sewfmu.scenarios.references.reference_files import plain_name
 
 
 @dataclass
@@ -60,6 +61,9 @@ def is_sewfmus(md) -> bool:
 def references_of(fmu: Path, refs: Path | None = None) -> list[Reference]:
     md = describe(fmu)
     if refs is not None:
+        # the modelName names the files read from refs: a plain name, or `../..` would read
+        # another folder's files as this FMU's reference
+        plain_name(md.modelName, fmu)
         found = fmu_reference.read_cross_check(Path(refs), md.modelName)
         if found is None:
             raise ScenarioError(f"{fmu}: no reference for {md.modelName} in {refs} (record one "
