@@ -11,14 +11,15 @@ internal (docs/architecture.md).
 import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first: see scenarios()
 from sewfmu._version import __version__
 
-__all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "scenarios",
+__all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "parameters",
+           "scenarios",
            "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
            "Diverged", "optimize", "fit", "sensitivity"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
 _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "build", "show",
-                                            "Run", "Sweep", "Scenario", "ScenarioError",
+                                            "parameters", "Run", "Sweep", "Scenario", "ScenarioError",
                                             "InaccurateRun")},
          "Error": "sewfmu.errors",
          "OutputError": "sewfmu.scenarios.files.outputs",

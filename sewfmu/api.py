@@ -27,8 +27,8 @@ from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, plain
 
-__all__ = ["load", "run", "sweep", "compare", "build", "show", "scenarios", "Run", "Sweep",
-           "Scenario", "ScenarioError"]
+__all__ = ["load", "run", "sweep", "compare", "build", "show", "parameters", "scenarios", "Run",
+           "Sweep", "Scenario", "ScenarioError"]
 
 
 def scenarios() -> list[str]:
@@ -55,14 +55,40 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
 
 
 def show(scenario: str) -> str:
-    """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`)."""
+    """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`); one of
+    sewfmu's FMUs by name (PunchContact): its inputs, outputs and parameters."""
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
     from sewfmu.scenarios.format.loader import resolve  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.parameter_table import (  # loaded on first use (start-up time)
+        component_text,
+    )
 
+    if isinstance(scenario, str) and scenario in FMUS:
+        return component_text(scenario)
     path = resolve(scenario)
     if path.suffix.lower() != ".toml":
         raise ScenarioError(f"{scenario}: only TOML scenarios can be shown (an SSP archive is "
                             f"read by sewfmu, not written back as TOML)")
     return path.read_text(encoding="utf-8-sig")
+
+
+def parameters(name: str | Path | Scenario, set: Mapping[str, Any] | None = None):
+    """The parameters a user may set, as a table (a list of dicts with instance, parameter,
+    default, value, unit, range, meaning; print() shows it as `sewfmu show NAME --parameters`):
+    of one of sewfmu's FMUs by name, or of every instance of a scenario (its values, `set`
+    applied, in `value`)."""
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.parameter_table import (  # loaded on first use (start-up time)
+        component_rows,
+        scenario_rows,
+    )
+
+    if isinstance(name, str) and name in FMUS:
+        if set:
+            raise ScenarioError(f"{name}: set= gives values to a scenario's instances; an FMU "
+                                f"by name shows its defaults")
+        return component_rows(name)
+    return scenario_rows(load(name, set))
 
 
 @dataclass
@@ -78,6 +104,7 @@ class Run:
     units: dict[str, str]
     out: Path | None = None
     runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
+    shaft: str | None = None                  # the MainShaft whose turns revolution() counts
 
     @property
     def figures(self) -> dict:
@@ -91,6 +118,13 @@ class Run:
     def to_pandas(self):
         """The time series as a pandas DataFrame indexed by time (pandas must be installed)."""
         return _frame(self.series, index="time")
+
+    def revolution(self, k: int = -1):
+        """The k-th whole revolution of the shaft (k=-1 the last): a structured array with
+        `crank_deg` in [0, 360), increasing (no wrap-around), and the recorded fields."""
+        from sewfmu.scenarios.runs.revolution import revolution  # numpy: not at `import sewfmu`
+
+        return revolution(self.series, f"{self.shaft or 'shaft'}.phi", k, self.name)
 
     def __repr__(self) -> str:
         if self.runs:
@@ -130,7 +164,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
         except OSError as err:
             raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
     out = Path(out) if out is not None else None
-    each = {label: _run_of(label or sc.name, result, own, out) for label, result, own in runs}
+    each = {label: _run_of(label or sc.name, result, own, out, sc.shaft or sc.default_shaft())
+            for label, result, own in runs}
     made = each[""] if not sc.compare else \
         Run(sc.name, summary_of_runs(sc, runs), None, {}, out, runs=each)
     beyond = [f"{label + ': ' if label else ''}{line}" for label, _, own in runs
@@ -143,7 +178,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     return made
 
 
-def _run_of(name: str, result, summary: dict, out: Path | None) -> Run:
+def _run_of(name: str, result, summary: dict, out: Path | None, shaft: str | None) -> Run:
     import numpy as np  # numpy: not at `import sewfmu`
 
     names = list(result.columns)
@@ -153,7 +188,7 @@ def _run_of(name: str, result, summary: dict, out: Path | None) -> Run:
         series[n] = result.columns[n]
     units = {"time": "s", **{n: result.units.get(n, "") for n in names},
              **summary.get("units", {})}
-    return Run(name, summary, series, units, out)
+    return Run(name, summary, series, units, out, shaft=shaft)
 
 
 @dataclass

@@ -113,6 +113,9 @@ def cmd_sweep(args) -> None:
 
 
 def cmd_show(args) -> None:
+    if args.parameters:
+        sys.stdout.write(str(api.parameters(args.scenario)))
+        return
     sys.stdout.write(api.show(args.scenario))
 
 
@@ -244,7 +247,7 @@ def main(argv=None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("build", help="build every FMU into fmus/ (FMI 3.0: fmus/fmi3/)")
     p.add_argument("--dest", help="output folder (default: fmus/; with --fmi 3 its fmi3/)")
-    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+    p.add_argument("--fmi", type=_fmi_version, default=2,
                    help="FMI version of the FMUs (default 2)")
     p.set_defaults(func=cmd_build)
     p = sub.add_parser("list", help="components and scenarios, one line each")
@@ -269,8 +272,12 @@ def main(argv=None) -> int:
             p.add_argument("--report", action="store_true",
                            help="report.html: one self-contained page with figures, plots, "
                                 "the animation and what was run")
-    p = sub.add_parser("show", help="print a catalogue scenario as TOML, to save and change")
-    p.add_argument("scenario", help="catalogue name (or path to a .toml file)")
+    p = sub.add_parser("show", help="print a catalogue scenario as TOML, to save and change; "
+                                    "or one of sewfmu's FMUs (PunchContact)")
+    p.add_argument("scenario", help="catalogue name, path to a .toml file, or an FMU's name")
+    p.add_argument("--parameters", action="store_true",
+                   help="a table of the parameters: instance, parameter, default, value, unit, "
+                        "declared range, meaning")
     p.set_defaults(func=cmd_show)
     p = sub.add_parser("export-ssp", help="the scenario as an SSP 1.0 archive for other tools")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
@@ -281,7 +288,7 @@ def main(argv=None) -> int:
                                           "tool")
     p.add_argument("scenario")
     p.add_argument("-o", "--output", required=True, help="the FMU file to write (X.fmu)")
-    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+    p.add_argument("--fmi", type=_fmi_version, default=2,
                    help="the FMI version of the exported FMU and of the FMUs inside (default 2)")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.set_defaults(func=cmd_export_fmu)
@@ -311,7 +318,7 @@ def main(argv=None) -> int:
     p.add_argument("--plot", nargs="?", const="results/references", metavar="DIR",
                    help="draw each deviating FMU's differences into DIR "
                         "(default results/references)")
-    p.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+    p.add_argument("--fmi", type=_fmi_version, default=2,
                    help="without --fmu: check sewfmu's FMUs of this FMI version (default 2)")
     p.set_defaults(func=cmd_references)
     p = sub.add_parser("host-env", help="the environment a non-Python FMI host needs")
@@ -374,6 +381,12 @@ def main(argv=None) -> int:
         print(f"sewfmu: error: {console.explain(err, args.command)}", file=sys.stderr)
         return 1
     return 0
+
+
+def _fmi_version(text: str) -> int:
+    if text.strip() in ("2", "2.0", "3", "3.0"):
+        return int(float(text))
+    raise argparse.ArgumentTypeError(f"the FMI version is 2 or 3, got {text!r}")
 
 
 def _positive_number(text: str) -> float:

@@ -34,7 +34,9 @@ def print_run(name: str, run, out: Path) -> None:
             spread = f"  ± {fmt(error)} {unit}".rstrip() if error is not None else ""
             print(f"    {key:24s} {fmt(value):>12s} {unit:4s}{spread}")
         done = {k: v for k, v in each.figures.items() if k not in physics}
-        if errors:
+        if errors.get("none"):
+            print(f"    (no coupling error estimated: {errors['none']})")
+        elif errors:
             how = f"no estimate ({errors['failed']})" if errors.get("failed") else \
                 f"from {errors['method']}"
             print(f"    (± : the estimated coupling error, {how})")

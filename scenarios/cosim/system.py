@@ -8,9 +8,11 @@ test can connect plain Python instances (tests/fake_fmu.py) the same way.
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 from typing import Callable
 
 from sewfmu.components.parameters import did_you_mean
+from sewfmu.scenarios.cosim.connection_units import conversion, convert_inputs
 from sewfmu.scenarios.cosim.divergence import bound_text, declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import LogCollector, kind_of
 from sewfmu.scenarios.format.scenario import Scenario
@@ -41,6 +43,7 @@ class System:
 
     def _connect(self, by_name: dict) -> None:
         sc = self.scenario
+        converted: dict[str, dict[int, tuple[float, float]]] = {}
         for con in sc.connections:
             what = f"{sc.source}: connection {con}"
             src, dst = by_name[con.src], by_name[con.dst]
@@ -48,13 +51,15 @@ class System:
             in_var = dst.variable(con.dst_var, ("input",), what)
             if kind_of(out_var) != "Real" or kind_of(in_var) != "Real":
                 raise ScenarioError(f"{what}: only Real connections are supported")
-            # a variable without a unit says nothing about it (FMUs from elsewhere): only two
-            # declared units that differ are a mismatch
-            if out_var.unit and in_var.unit and out_var.unit != in_var.unit:
-                raise ScenarioError(f"{what}: incompatible units {out_var.unit!r} -> "
-                                    f"{in_var.unit!r}")
+            # a variable without a unit says nothing about it (FMUs from elsewhere); two
+            # declared units that differ are converted through the unit definitions, or refused
+            scale = conversion(out_var, src.md, in_var, dst.md, what)
+            if scale is not None:
+                converted.setdefault(con.dst, {})[len(dst.inputs)] = scale
             src.want_output(con.src_var, what)
             dst.inputs.append((con.dst_var, src, con.src_var))
+        for name, scales in converted.items():
+            convert_inputs(by_name[name], scales)
 
     def settle_loops(self) -> None:
         """Carry changed outputs around the feedback loops until they settle (or `passes` are
@@ -134,13 +139,19 @@ def check_inputs_given(scenario: Scenario, instances: list) -> None:
                 continue
             text = (f"{scenario.source}: input {inst.name}.{v.name} is neither connected nor "
                     f"given a value")
-            if scenario.fmu_files:
+            if _from_ssp(scenario):
                 warnings.warn(f"{text}: it keeps its start value {v.start}", InputLeftOpen,
                               stacklevel=2)
                 continue
             raise ScenarioError(f"{text}: connect it (\"<instance>.<output> -> "
                                 f"{inst.name}.{v.name}\") or give it a value in "
                                 f"[instances.{inst.name}] parameters")
+
+
+def _from_ssp(scenario: Scenario) -> bool:
+    """A system read from SSP (whose inputs may keep their start values, as SSP allows); a TOML
+    scenario's FMU files, whoever made them, follow the TOML's rule: every input given."""
+    return bool(scenario.fmu_files) and Path(scenario.source).suffix.lower() in (".ssp", ".ssd")
 
 
 def dependency_order(instances: list) -> tuple[list, list]:

@@ -75,7 +75,10 @@ def _refuse(path: Path, limits: Limits, text: str) -> ArchiveError:
 
 def _too_big(path: Path, limits: Limits, whose: str, size: int, limit: int) -> ArchiveError:
     raise_it = f" ({limits.setting} raises it)" if limits.setting else ""
-    return _refuse(path, limits, f"{whose} unpacks to {_mib(size)}, more than the {_mib(limit)} "
+    said, allowed = _mib(size), _mib(limit)
+    if said == allowed:                      # just over the limit: say it in bytes
+        said, allowed = f"{size:,} bytes", f"{limit:,} bytes"
+    return _refuse(path, limits, f"{whose} unpacks to {said}, more than the {allowed} "
                                  f"allowed{raise_it}; refused (a zip bomb?)")
 
 

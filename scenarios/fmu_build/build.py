@@ -301,13 +301,26 @@ def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
 
 
 def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
-    """The FMU file of each FMU type a scenario uses: an SSP system's own, or sewfmu's built
-    where missing or stale."""
+    """The FMU file of each FMU type a scenario uses: the files it names (an SSP system's own,
+    a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale."""
+    from sewfmu.scenarios.format.fmu_file import (  # loaded on first use (start-up time)
+        fmu_path,
+        is_fmu_file,
+        read_fmu,
+    )
+
     names = sorted({inst.fmu for inst in scenario.instances.values()})
-    if scenario.fmu_files:                  # a system read from SSP brings its own FMUs
-        return {name: scenario.fmu_files[name] for name in names}
-    unknown = [n for n in names if n not in FMUS]
+    found = {name: scenario.fmu_files[name] for name in names if name in scenario.fmu_files}
+    for name in names:
+        if name not in found and is_fmu_file(name):
+            # an instance added in Python names the file itself (a scenario file's are in
+            # fmu_files): from the folder the process runs in, as Python's open() takes it
+            where = f"{scenario.source}: fmu {name!r}"
+            found[name] = fmu_path(name, Path.cwd(), where)
+            read_fmu(found[name], where)
+    unknown = [n for n in names if n not in found and n not in FMUS]
     if unknown:
         raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
-                            f"(known: {', '.join(FMUS)})")
-    return fmus_for_names(names, fmu_dir, scenario.fmi)
+                            f"(known: {', '.join(FMUS)}; or the path of an .fmu file)")
+    own = [n for n in names if n not in found]
+    return {**found, **(fmus_for_names(own, fmu_dir, scenario.fmi) if own else {})}

@@ -2,11 +2,13 @@
 instances and their FMUs, connections with one source each, record, [compare], [sweep], roles."""
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.fmu_file import check_parameter, fmu_path, is_fmu_file, read_fmu
 from sewfmu.scenarios.format.master_settings import MASTER_NAMES
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
 from sewfmu.scenarios.format.values import (
@@ -71,6 +73,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         raise ScenarioError(f"{source}: experiment.shaft names the shaft whose revolutions are "
                             f"counted; with stop_time it has no use: remove one of them")
     instances = {}
+    files, described = {}, {}           # FMU files named in it: text -> path; instance -> md
     for inst_name, spec in _table(data, "instances", source).items():
         where = f"{source}: instances.{inst_name}"
         try:
@@ -86,9 +89,13 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         params = spec.get("parameters", {})
         if not isinstance(params, dict):
             raise ScenarioError(f"{where}.parameters must be a table")
-        if spec["fmu"] not in FMUS:
+        if is_fmu_file(spec["fmu"]):     # any FMU, by its path from the scenario file's folder
+            files[spec["fmu"]] = fmu_path(spec["fmu"], Path(source).parent, where)
+            described[inst_name] = read_fmu(files[spec["fmu"]], where)
+        elif spec["fmu"] not in FMUS:
             raise ScenarioError(f"{where}: unknown FMU {spec['fmu']!r}"
-                                f"{did_you_mean(spec['fmu'], FMUS)} (known: {', '.join(FMUS)})")
+                                f"{did_you_mean(spec['fmu'], FMUS)} (known: {', '.join(FMUS)}; "
+                                f"or the path of an .fmu file)")
         inst = Instance(inst_name, spec["fmu"], {})
         instances[inst_name] = inst
     scenario = Scenario(
@@ -101,6 +108,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         revolutions=(positive(exp["revolutions"], f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
+    scenario.fmu_files = files          # set_value reads their declared units
     for key in ("record_every", "tolerance", "acceleration", "fmi"):
         if key in exp:
             scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
@@ -110,6 +118,10 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         for key, value in spec.get("parameters", {}).items():
             scenario.set_value(f"{inst_name}.{key}", value,
                                origin=f"{source}: instances.{inst_name}.parameters")
+            if inst_name in described:  # sewfmu's own FMUs are checked by set_value
+                check_parameter(described[inst_name], key,
+                                scenario.instances[inst_name].parameters[key],
+                                f"{source}: instances.{inst_name}.parameters.{key}")
     scenario.roles = _bind_roles(data, instances, source)
     if scenario.revolutions is not None:
         if scenario.shaft is None:

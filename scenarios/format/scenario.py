@@ -183,7 +183,8 @@ class Scenario:
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
-        from sewfmu.components.units import UnitError, in_unit  # loaded on first use (start-up time)
+        from sewfmu.components.units import UnitError  # loaded on first use (start-up time)
+        from sewfmu.scenarios.format.quantities import in_declared_unit  # pint: on first use
 
         fmu = self.instances[inst].fmu
         units = (_declared_units(self.fmu_files[fmu]) if fmu in self.fmu_files
@@ -192,9 +193,11 @@ class Scenario:
             raise ScenarioError(f"{where}: {inst} ({fmu}) has no parameter {key!r}"
                                 f"{did_you_mean(key, units)}")
         try:
-            return in_unit(text, units[key])
+            return in_declared_unit(text, units[key], f"{inst}.{key}")
         except UnitError as err:
-            raise ScenarioError(f"{where}: {err}") from None
+            # the message names the parameter itself ("punch.c2 = '30 N': ..."): where, before it
+            origin = where.removesuffix(f"{inst}.{key}").strip()
+            raise ScenarioError(f"{origin} {err}" if origin else str(err)) from None
 
     def _set_experiment(self, key: str, value: Any, origin: str) -> None:
         choices = {"master": MASTER_NAMES, "acceleration": ACCELERATIONS}

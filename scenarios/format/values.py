@@ -67,11 +67,14 @@ def positive(value: Any, where: str) -> float:
 def seconds(value: Any, where: str) -> float:
     """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
     if isinstance(value, str):
-        from sewfmu.components.units import UnitError, in_unit  # loaded on first use (start-up time)
+        from sewfmu.components.units import UnitError  # loaded on first use (start-up time)
+        from sewfmu.scenarios.format.quantities import in_declared_unit  # pint: on first use
+        # where ends with the key ("file: experiment.step"); the message names the key itself
+        origin, _, key = where.rpartition(" ")
         try:
-            value = in_unit(value, "s")
+            value = in_declared_unit(value, "s", key)
         except UnitError as err:
-            raise ScenarioError(f"{where}: {err}") from None
+            raise ScenarioError(f"{origin} {err}" if origin else str(err)) from None
     return positive(value, where)
 
 

@@ -40,6 +40,7 @@ from sewfmu.scenarios.cosim.algorithms import FIXED_STEP
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.cosim.system import check_parameters
+from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.fmu_build.build import current_version, fmus_for_names
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
@@ -94,7 +95,11 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
         built, tree = Path(work) / "container.fmu", Path(work) / "tree"
         tree.mkdir()                     # fmpy removes and makes it again
         create_container_fmu(config, tree, built)
-        _finish(built, output, scenario, exposed)
+        try:
+            _finish(built, output, scenario, exposed)
+        except OSError as err:             # the folder named: not the temporary beside it
+            raise OutputError(f"-o {output}: cannot write there: {err.strerror or err}") \
+                from None
     return output
 
 

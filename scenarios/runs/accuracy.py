@@ -54,13 +54,18 @@ def coarser(scenario: Scenario) -> tuple[Scenario, float, str] | None:
 def estimate(scenario: Scenario, summary: dict, fmu_dir: Path | None = None) -> dict | None:
     """{"method", "figures": {figure: estimated error}} (in the figures' units), or with
     "failed": the reason the coarser run gave none; None for a scenario without key figures."""
-    if not scenario.analysis or analyses.mechanism(scenario.analysis).kinematic:
+    if not scenario.analysis:
         return None
+    if analyses.mechanism(scenario.analysis).kinematic:
+        return {"method": None, "figures": {},
+                "none": "kinematic: the FMUs give exact positions at every communication point"}
     names = [k for k in analyses.mechanism(scenario.analysis).figures
              if isinstance(summary.get(k), (int, float))]
     made = coarser(scenario) if names else None
     if made is None:
-        return None
+        return {"method": None, "figures": {},
+                "none": "no coarser run to compare with (a run of under 4 steps, or the "
+                        "adaptive master already at its loosest tolerance)"}
     coarse, divisor, how = made
     try:
         other = summarize(simulate(coarse, fmu_dir))
@@ -78,7 +83,7 @@ def beyond(summary: dict, accuracy: float) -> list[str]:
     """The figures whose estimated error exceeds `accuracy` (relative to the figure), or the
     reason there is no estimate; [] where the run is within it or was not estimated."""
     found = summary.get("coupling_error")
-    if not found:
+    if not found or found.get("none"):
         return []
     if found.get("failed"):
         return [f"no estimate: {found['method']} failed ({found['failed']})"]

@@ -179,7 +179,7 @@ def run_report(path: Path, scenario, runs: list[tuple], pictures: list[tuple[str
     sections.append(figures)
     for label, _, own in runs:                # the estimated coupling error of each figure
         found = own.get("coupling_error")
-        if not found:
+        if not found or found.get("none"):
             continue
         errors = Section("Estimated coupling error" + (f", {label}" if label else ""))
         if found.get("failed"):

@@ -326,39 +326,100 @@ def _progress(total: int, already: int, enabled: bool, name: str):
     return tqdm(total=total, initial=already, desc=f"sweep {name}", unit="point")
 
 
-def plot_table(rows: list[dict], swept: list[str], figures: list[str], path: Path,
-               title: str) -> None:
-    """Each key figure against each swept parameter; one line per combination of the others."""
+def _numeric(values) -> bool:
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+
+
+def _shown(value, unit: str) -> str:
+    return f"{value:g}{' ' + unit if unit else ''}" if _numeric([value]) else str(value)
+
+
+def declared_unit(scenario: Scenario, target: str) -> str:
+    """The unit a swept `instance.parameter` (as its FMU declares it) or experiment key is held
+    in: the unit of its axis."""
+    from sewfmu.components.registry import FMUS, parameter_units  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS  # loaded on first use (start-up time)
+
+    inst, _, key = target.partition(".")
+    if inst == "experiment":
+        return EXPERIMENT_KEYS[key].unit if key in EXPERIMENT_KEYS else ""
+    fmu = scenario.instances[inst].fmu if inst in scenario.instances else None
+    # an FMU from another tool declares its units in its file: the axis names none
+    if fmu not in FMUS or fmu in scenario.fmu_files:
+        return ""
+    return parameter_units(fmu).get(key, "")
+
+
+def sweep_title(scenario: Scenario, rows: list[dict], swept: list[str]) -> str:
+    """What was run, as it was run: the scenario's description may name a length the sweep's
+    settings changed (it says 10 revolutions; --set made them 3)."""
+    if "experiment.revolutions" in swept or "experiment.stop_time" in swept:
+        length = "length as swept"
+    elif scenario.revolutions is not None:
+        length = (f"{scenario.revolutions:g} revolution{'s' if scenario.revolutions != 1 else ''}"
+                  f" of {scenario.shaft or scenario.default_shaft() or 'the shaft'}")
+    else:
+        length = f"stop time {scenario.stop_time:g} s"
+    failed = sum(1 for r in rows if r["status"] != "ok")
+    return (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
+            f"{f' ({failed} failed)' if failed else ''}; each {length}, step "
+            f"{scenario.step * 1e3:g} ms, {scenario.master} master")
+
+
+def sweep_figure(rows: list[dict], swept: list[str], figures: dict[str, str],
+                 units: dict[str, str], title: str):
+    """Each key figure (figure -> unit) against each swept parameter (units: parameter ->
+    unit), one line per combination of the others: a matplotlib Figure. A numeric parameter is
+    spaced by its values; any other (a master's name) is one tick per value."""
     import matplotlib  # matplotlib: only when drawing
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     ok = [r for r in rows if r["status"] == "ok"]
-    fig, axes = plt.subplots(len(figures), len(swept), figsize=(4.2 * len(swept),
-                                                                  2.6 * len(figures)),
-                             squeeze=False)
+    # one column is wide enough for the title's lines; constrained layout keeps the title and
+    # the labels inside the picture (tight_layout left a long suptitle clipped)
+    width = max(6.4, 4.2 * len(swept))
+    fig, axes = plt.subplots(len(figures), len(swept), figsize=(width, 0.6 + 2.6 * len(figures)),
+                             squeeze=False, layout="constrained")
     for j, param in enumerate(swept):
         others = [s for s in swept if s != param]
+        values = list(dict.fromkeys(r[param] for r in rows))
+        numeric = _numeric(values)
+        where = (lambda v: v) if numeric else values.index
         groups: dict[tuple, list[dict]] = {}
         for r in ok:
             groups.setdefault(tuple(r[o] for o in others), []).append(r)
-        for i, figure in enumerate(figures):
+        for i, (figure, unit) in enumerate(figures.items()):
             ax = axes[i][j]
-            for group, members in sorted(groups.items()):
-                members = sorted(members, key=lambda r: r[param])
+            # numbers in their order (5 before 10), names after them: mixed values sort too
+            for group, members in sorted(groups.items(), key=lambda g: [
+                    (0, v, "") if _numeric([v]) else (1, 0, str(v)) for v in g[0]]):
+                members = sorted(members, key=lambda r: where(r[param]))
                 ys = [r.get(figure) for r in members]
                 if any(y is None for y in ys):
                     continue
-                ax.plot([r[param] for r in members], ys, "o-", ms=3, lw=1, alpha=0.8,
-                        label=", ".join(f"{o.split('.')[-1]}={g:g}" for o, g in zip(others, group)))
-            ax.set(xlabel=param if i == len(figures) - 1 else "", ylabel=figure if j == 0 else "")
+                ax.plot([where(r[param]) for r in members], ys, "o-", ms=3, lw=1, alpha=0.8,
+                        label=", ".join(f"{o.split('.')[-1]}={_shown(g, units.get(o, ''))}"
+                                        for o, g in zip(others, group)))
+            if not numeric:
+                ax.set_xticks(range(len(values)), [str(v) for v in values])
+            axis = f"{param} [{units[param]}]" if units.get(param) else param
+            ax.set(xlabel=axis if i == len(figures) - 1 else "",
+                   ylabel=f"{figure} [{unit}]" if unit else figure)
             ax.grid(alpha=0.3)
         if axes[0][j].get_legend_handles_labels()[0]:      # one swept parameter: no legend
             axes[0][j].legend(fontsize=6, ncol=1, loc="best")
-    failed = len(rows) - len(ok)
-    fig.suptitle("\n".join(textwrap.wrap(title + (f" ({failed} points failed)" if failed else ""),
-                                         100)), fontsize=10)
-    fig.tight_layout()
+    # about 0.6 of the font size per character: the lines fit the figure's width
+    fig.suptitle("\n".join(textwrap.wrap(title, int(width * 72 / (10 * 0.6)) - 4)), fontsize=10)
+    return fig
+
+
+def plot_table(rows: list[dict], swept: list[str], figures: dict[str, str], path: Path,
+               title: str, units: dict[str, str]) -> None:
+    """The figure of sweep_figure, as a PNG."""
+    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+
+    fig = sweep_figure(rows, swept, figures, units, title)
     write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"), binary=True)
     plt.close(fig)
 
@@ -371,8 +432,10 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
 
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
-        figures = [f for f in analyses.mechanism(scenario.analysis).figures if f != "n_contacts"]
-        plot_table(rows, swept, figures, picture, scenario.description)
+        figures = {f: unit for f, unit in analyses.mechanism(scenario.analysis).figures.items()
+                   if f != "n_contacts"}
+        plot_table(rows, swept, figures, picture, sweep_title(scenario, rows, swept),
+                   {param: declared_unit(scenario, param) for param in swept})
     if report:
         from sewfmu.scenarios.runs.report import sweep_report  # loaded on first use (start-up time)
         sweep_report(out_dir / "report.html", scenario, rows, swept,

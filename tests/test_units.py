@@ -1,0 +1,94 @@
+"""Values with units as engineers write them: every unit the brief names lands in the declared SI
+unit as pint itself converts it, rpm is 2π/60 rad/s exactly, a unit of the wrong dimension is one
+line naming both dimensions, and a bare number stays as it is (the declared unit)."""
+import math
+from pathlib import Path
+
+import pint
+import pytest
+
+from sewfmu.components.units import UnitError
+from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.format.quantities import in_declared_unit
+from sewfmu.scenarios.format.values import ScenarioError
+
+UREG = pint.UnitRegistry()     # pint's own definitions, apart from the module's registry
+
+# (what is written, the declared SI unit, the same value as pint spells it)
+WRITTEN = [
+    ("3 kN", "N", "3 kilonewton"), ("5 mN", "N", "5 millinewton"),
+    ("2 kgf", "N", "2 kilogram_force"), ("3 lbf", "N", "3 pound_force"),
+    ("2 mm", "m", "2 millimeter"), ("5 µm", "m", "5 micrometer"), ("5 um", "m", "5 micrometer"),
+    ("1.5 in", "m", "1.5 inch"),
+    ("955 rpm", "rad/s", "955 revolution/minute"), ("955 rev/min", "rad/s", "955 revolution/minute"),
+    ("955 1/min", "rad/s", "955 revolution/minute"), ("16 rev/s", "rad/s", "16 revolution/second"),
+    ("720 deg/s", "rad/s", "720 degree/second"),
+    ("150 N/mm", "N/m", "150 newton/millimeter"), ("800 lbf/in", "N/m", "800 pound_force/inch"),
+    ("63 g", "kg", "63 gram"), ("2 kg", "kg", "2 kilogram"), ("0.5 lb", "kg", "0.5 pound"),
+    ("0.25 ms", "s", "0.25 millisecond"), ("2 s", "s", "2 second"), ("1.5 min", "s", "1.5 minute"),
+    ("110 deg", "rad", "110 degree"), ("1.2 rad", "rad", "1.2 radian"),
+]
+
+
+@pytest.mark.parametrize("text, unit, pints", WRITTEN, ids=[w[0] for w in WRITTEN])
+def test_every_unit_lands_in_the_declared_si_unit_as_pint_converts_it(text, unit, pints):
+    expected = UREG.Quantity(pints).to({"N": "newton", "m": "meter", "rad/s": "radian/second",
+                                        "N/m": "newton/meter", "kg": "kilogram",
+                                        "s": "second", "rad": "radian"}[unit]).magnitude
+    assert in_declared_unit(text, unit) == pytest.approx(expected, rel=1e-14)
+
+
+def test_rpm_is_two_pi_over_sixty_exactly():
+    for text in ("955 rpm", "955 rev/min", "955 1/min"):
+        assert in_declared_unit(text, "rad/s") == 955 * 2 * math.pi / 60
+    assert in_declared_unit("1 rpm", "rad/s") == 2 * math.pi / 60
+
+
+@pytest.mark.parametrize("value", [300.0, 300, 0.0, -2.5])
+def test_a_bare_number_is_in_the_declared_unit(value):
+    sc = load("punch_drive")
+    sc.set_value("shaft.omega0", value)
+    assert sc.instances["shaft"].parameters["omega0"] == value
+    assert in_declared_unit(str(value), "rad/s") == float(value)     # a string without a unit
+
+
+@pytest.mark.parametrize("target, text, said", [
+    ("punch.c2", "30 N", "punch.c2 = '30 N': N is a force, punch.c2 wants a stiffness (N/m)"),
+    ("shaft.omega0", "3 mm", "mm is a length, shaft.omega0 wants a rotational speed (rad/s)"),
+    ("punch.F30", "2 lb", "lb is a mass, punch.F30 wants a force (N)"),
+    ("experiment.step", "1 deg", "deg is an angle, experiment.step wants a time (s)"),
+])
+def test_a_unit_of_the_wrong_dimension_is_refused_in_one_line(target, text, said):
+    with pytest.raises(ScenarioError) as err:
+        load("punch_drive").set_value(target, text)
+    assert said in str(err.value) and "\n" not in str(err.value)
+
+
+def test_an_unknown_unit_and_a_missing_number_are_refused():
+    with pytest.raises(UnitError, match="'furlongs/fortnight' is not a unit|is a velocity"):
+        in_declared_unit("3 furlongs/fortnight", "N")
+    with pytest.raises(UnitError, match="'foo' is not a unit"):
+        in_declared_unit("3 foo", "N")
+    with pytest.raises(UnitError, match="must be a number"):
+        in_declared_unit("fast", "rad/s")
+
+
+def test_units_reach_the_scenario_from_every_door(tmp_path):
+    """--set and the API's set= (set_value), a scenario file and a sweep grid take the same
+    strings and hold the number in the declared unit."""
+    from sewfmu.scenarios.runs.sweep import points_of
+
+    sc = load("punch_drive")
+    sc.set_value("punch.c2", "150 N/mm")
+    sc.set_value("experiment.step", "0.25 ms")
+    assert sc.instances["punch"].parameters["c2"] == pytest.approx(150e3)
+    assert sc.step == pytest.approx(2.5e-4)
+    toml = load("punch_drive").source
+    text = Path(toml).read_text().replace("omega0 = 100.0", 'omega0 = "955 rpm"')
+    text = text.replace("step = 2.5e-4", 'step = "0.25 ms"')
+    (tmp_path / "mine.toml").write_text(text)
+    mine = load(str(tmp_path / "mine.toml"))
+    assert mine.instances["shaft"].parameters["omega0"] == 955 * 2 * math.pi / 60
+    assert mine.step == pytest.approx(2.5e-4)
+    points = points_of(load("punch_drive"), {"shaft.omega0": ["955 rpm", "100 rad/s"]})
+    assert [dict(p.values)["shaft.omega0"] for p in points] == [955 * 2 * math.pi / 60, 100.0]
