@@ -419,12 +419,10 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
              set: Mapping[str, Any] | None = None, method: str = "local",
              workers: int | None = None, out: str | Path | None = None, plot: bool = False,
              max_evaluations: int | None = None):
-    """Optimize a key figure over parameter ranges (`sewfmu optimize`): vary {"inst.param":
-    (lo, hi) or "LO..HI unit"}, one of minimize=FIGURE, maximize=FIGURE, target={FIGURE: value},
-    constraints ["FIGURE>=VALUE unit", ...]. Returns an Optimum (.best, .figures,
-    .evaluations, .converged); with `out`, evaluations.csv (a rerun there resumes),
-    optimize.json and with `plot` convergence.png. method "global": differential evolution on
-    `workers` processes (default all cores)."""
+    """`sewfmu optimize`: vary {"inst.param": (lo, hi) or "LO..HI unit"}, one of
+    minimize=FIGURE, maximize=FIGURE, target={FIGURE: value}; constraints ["FIGURE>=VALUE unit"].
+    An Optimum (.best, .figures, .evaluations, .converged); with `out` evaluations.csv (a rerun
+    there resumes), optimize.json, with `plot` convergence.png."""
     from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
@@ -435,17 +433,16 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
     variables = space.variables(sc, vary, described)
     if plot and out is None:
         raise ScenarioError("plot is a file: give out= a folder for it")
-    return design.optimize(sc, paths, variables, goal, limits, method,
-                           _workers(workers, method == "global"), out, plot, max_evaluations)
+    return design.optimize(sc, paths, variables, goal, limits, method, workers, out, plot,
+                           max_evaluations)
 
 
 def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
         set: Mapping[str, Any] | None = None, out: str | Path | None = None,
         max_evaluations: int | None = None):
-    """Fit parameters to measurements (`sewfmu fit`): data a CSV file (a `time` column and
-    columns named like recorded outputs, `punch.F2`) or a structured array; free
-    {"inst.param": (lo, hi)}. Returns a Fit (.estimates, .standard_errors, .residuals); with
-    `out`, fit.json and fit.png."""
+    """`sewfmu fit`: data a CSV file (a `time` column, columns named like recorded outputs) or a
+    structured array; free {"inst.param": (lo, hi)}. A Fit (.estimates, .standard_errors,
+    .residuals); with `out` fit.json and fit.png."""
     from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
@@ -461,28 +458,14 @@ def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figure
                 *, set: Mapping[str, Any] | None = None, method: str = "sobol",
                 samples: int | None = None, workers: int | None = None,
                 out: str | Path | None = None, progress: bool = False):
-    """Global sensitivity of key figures to parameter ranges (`sewfmu sensitivity`): SALib's
-    Sobol or Morris method, the samples run as a sweep (parallel, resumable into `out`).
-    Returns a Sensitivity whose `table` ranks the parameters for each figure."""
+    """`sewfmu sensitivity`: SALib's Sobol or Morris indices of key figures over parameter
+    ranges, the samples run as a sweep (resumable into `out`). A Sensitivity whose `table`
+    ranks the parameters for each figure."""
     from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
     sc, _, described = _design_scenario(scenario, set)
-    known = space.figures_of_scenario(sc)
-    figures = [figures] if isinstance(figures, str) else list(figures or [])
-    if not figures:
-        raise ScenarioError("--figure: name at least one key figure")
-    figures = [space.check_figure(f, known, "--figure") for f in figures]
+    named = space.figures_named(space.figures_of_scenario(sc), figures)
     variables = space.variables(sc, vary, described)
-    return design.sensitivity(sc, variables, figures, known, method, samples,
-                              _workers(workers, True), out, progress)
-
-
-def _workers(workers: int | None, parallel: bool) -> int:
-    import os  # only here: the default pool is every core
-
-    if workers is None:
-        return (os.cpu_count() or 1) if parallel else 1
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ScenarioError(f"workers: a whole number >= 1, got {workers!r}")
-    return workers
+    return design.sensitivity(sc, variables, named, space.figures_of_scenario(sc), method,
+                              samples, workers, out, progress)

@@ -62,12 +62,21 @@ def cmd_optimize(args) -> None:
     if not o.converged:
         _warn(f"the {o.algorithm} search did not converge ({o.message}); the best point "
               f"evaluated is shown")
+    why = "within the ranges it cannot be reached" if o.converged else "the search stopped first"
+    for figure, miss in o.summary.get("misses", {}).items():
+        goal = o.summary["target"][figure]
+        if miss is not None and abs(miss) > 1e-3 * (abs(goal) or 1.0):
+            unit = o.units.get(figure, "")
+            _warn(f"{figure} = {_quantity(goal + miss, unit)} misses its target "
+                  f"{_quantity(goal, unit)} ({why}); the closest point is shown")
     print(f"{o.scenario}: best of {len(o.evaluations)} evaluations ({o.computed} run now; "
           f"{o.algorithm}); results in {out}/")
+    print("  best point:")
     for name, value in o.best.items():
-        print(f"  {name} = {_quantity(value, o.units.get(name, ''))}")
-    print("  " + ", ".join(f"{k} = {_quantity(v, o.units.get(k, ''))}"
-                           for k, v in o.figures.items()))
+        print(f"    {name:24s} {_quantity(value, o.units.get(name, ''))}")
+    print("  its key figures:")
+    for name, value in o.figures.items():
+        print(f"    {name:24s} {_quantity(value, o.units.get(name, ''))}")
 
 
 def cmd_fit(args) -> None:
@@ -137,11 +146,12 @@ def add_commands(sub) -> None:
     p.add_argument("--method", choices=("local", "global"), default="local",
                    help="local: brentq, bounded scalar, Nelder-Mead or SLSQP (default); "
                         "global: differential evolution, in parallel")
-    p.add_argument("--workers", type=_count, help="worker processes of the global method "
-                                                  "(default: all cores)")
-    p.add_argument("--max-evaluations", type=_count, help="stop after this many evaluations "
-                                                          "(default 200 local, 400 global)")
-    p.add_argument("--out", help="output folder (default: results/SCENARIO_optimize/); a study "
+    p.add_argument("--workers", type=_count, metavar="N",
+                   help="worker processes of the global method (default: all cores)")
+    p.add_argument("--max-evaluations", type=_count, metavar="N",
+                   help="stop after this many evaluations (default 200 local, 400 global)")
+    p.add_argument("--out", metavar="DIR",
+                   help="output folder (default: results/SCENARIO_optimize/); a study "
                                  "run again into it resumes")
     p.add_argument("--plot", action="store_true", help="convergence.png")
     p.set_defaults(func=cmd_optimize)
@@ -152,8 +162,9 @@ def add_commands(sub) -> None:
     p.add_argument("--free", action="append", required=True, metavar="INSTANCE.PARAM=LO..HI",
                    help="a parameter to fit and its range; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
-    p.add_argument("--max-evaluations", type=_count, help="least_squares' max_nfev (default 100)")
-    p.add_argument("--out", help="output folder (default: results/SCENARIO_fit/)")
+    p.add_argument("--max-evaluations", type=_count, metavar="N",
+                   help="least_squares' max_nfev (default 100)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/)")
     p.set_defaults(func=cmd_fit)
     p = sub.add_parser("sensitivity", help="which parameters matter to key figures (SALib)")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
@@ -163,11 +174,14 @@ def add_commands(sub) -> None:
                    help="a key figure to analyze; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
-    p.add_argument("--samples", type=_count, help="Sobol: base samples N, a power of 2 "
+    p.add_argument("--samples", type=_count, metavar="N",
+                   help="Sobol: base samples N, a power of 2 "
                                                   "(N·(D+2) runs; default 64); Morris: "
                                                   "trajectories (N·(D+1) runs; default 16)")
-    p.add_argument("--workers", type=_count, help="local worker processes (default: all cores)")
-    p.add_argument("--out", help="output folder (default: results/SCENARIO_sensitivity/); a "
+    p.add_argument("--workers", type=_count, metavar="N",
+                   help="local worker processes (default: all cores)")
+    p.add_argument("--out", metavar="DIR",
+                   help="output folder (default: results/SCENARIO_sensitivity/); a "
                                  "study run again into it resumes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sensitivity)

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 from sewfmu.components.parameters import did_you_mean
-from sewfmu.components.units import DISPLAY_UNITS, UnitError, in_unit
+from sewfmu.components.units import UnitError
 from sewfmu.scenarios.analyses import figure_units
 from sewfmu.scenarios.cosim.divergence import declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.format.quantities import in_declared_unit
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, short
 
@@ -71,7 +72,7 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
         var = next(v for v in md.modelVariables if v.name == key)
         unit = var.unit or ""
         if kind_of(var) != "Real":
-            raise ScenarioError(f"{where}: {key} is a {kind_of(var)} parameter of {inst} "
+            raise ScenarioError(f"{where}: {key} is an {kind_of(var).lower()} parameter of {inst} "
                                 f"({md.modelName}); only real parameters can be varied")
         if not lo < hi:
             raise ScenarioError(f"{where}: the lower bound {lo:g} {unit} is not below the upper "
@@ -136,24 +137,23 @@ def check_figure(name: str, known: Mapping[str, str], where: str) -> str:
     return name
 
 
-def figure_value(value: Any, unit: str, where: str) -> float:
-    """A figure's value given as a number (in the figure's unit) or a string with a unit that
-    fits ("25 N", "0.5 rad" for a figure in degrees, "0.0055 m" for one in millimetres)."""
+def figures_named(known: Mapping[str, str], figures: Any) -> list[str]:
+    """The figures a sensitivity analysis reads: one name or several, each a key figure."""
+    figures = [figures] if isinstance(figures, str) else list(figures or [])
+    if not figures:
+        raise ScenarioError("--figure: name at least one key figure")
+    return [check_figure(str(f), known, "--figure") for f in figures]
+
+
+def figure_value(value: Any, unit: str, where: str, figure: str) -> float:
+    """A figure's value given as a number (in the figure's unit) or a string with any unit of
+    its kind ("25 N", "2.5 kgf", "1.9 rad" for a figure in degrees), converted as --set values
+    are (format/quantities.py)."""
     if isinstance(value, str):
         try:
-            number = in_unit(value, unit)
+            value = in_declared_unit(value, unit, figure)
         except UnitError as err:
-            number = None
-            # a figure in a display unit (deg, mm): through its SI unit
-            for base, displays in DISPLAY_UNITS.items():
-                if unit in displays:
-                    try:
-                        number = in_unit(value, base) * displays[unit]
-                    except UnitError:
-                        pass
-            if number is None:
-                raise ScenarioError(f"{where}: {err}") from None
-        value = number
+            raise ScenarioError(f"{where}: {err}") from None
     if isinstance(value, bool) or not isinstance(value, (int, float)) \
             or not math.isfinite(float(value)):
         raise ScenarioError(f"{where}: expected a finite number, with its unit where it has one, "
@@ -205,7 +205,7 @@ def goal_of(known: Mapping[str, str], minimize: str | None = None, maximize: str
         return Goal(sense, ((check_figure(str(figure).strip(), known, f"--{sense}"), math.nan),))
     items = _target_items(target)
     return Goal("target", tuple(
-        (check_figure(f, known, "--target"), figure_value(v, known[f], f"--target {f}"))
+        (check_figure(f, known, "--target"), figure_value(v, known[f], "--target", f))
         for f, v in items))
 
 
@@ -265,6 +265,6 @@ def constraints_of(known: Mapping[str, str], given: Sequence | None) -> list[Con
                                 f"'<=', value), got {short(item)}")
         where = f"--constraint {figure}{op}{value}"
         check_figure(str(figure), known, where)
-        out.append(Constraint(str(figure), op, figure_value(value, known[figure], where),
+        out.append(Constraint(str(figure), op, figure_value(value, known[figure], where, figure),
                               known[figure]))
     return out
