@@ -69,7 +69,12 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
         lo_text, hi_text = _bounds(spec, where)
         lo, hi = (_in_declared_unit(scenario, name, v, option) for v in (lo_text, hi_text))
         md = descriptions[inst]
-        var = next(v for v in md.modelVariables if v.name == key)
+        var = next((v for v in md.modelVariables if v.name == key
+                    and v.causality in ("parameter", "input")), None)
+        if var is None:                     # an FMU from elsewhere: set_value took its word
+            names = [v.name for v in md.modelVariables if v.causality == "parameter"]
+            raise ScenarioError(f"{where}: {inst} ({md.modelName}) has no parameter {key!r}"
+                                f"{did_you_mean(key, names)}")
         unit = var.unit or ""
         if kind_of(var) != "Real":
             raise ScenarioError(f"{where}: {key} is an {kind_of(var).lower()} parameter of {inst} "
