@@ -313,3 +313,18 @@ def test_the_commands_write_their_files(tmp_path, capsys):
     for name in ("o/optimize.json", "o/evaluations.csv", "o/convergence.png", "f/fit.json",
                  "f/fit.png", "s/sensitivity.json", "s/sensitivity_F2_peak.png"):
         assert (tmp_path / name).exists(), name
+
+
+@pytest.mark.parametrize("header, row, said", [
+    ("time,punch.F2 [N],punch.F2", "0.01,1.0,2.0", "given twice"),
+    ("time,punch.F2 [N]", "0.01,inf", "not a measurement"),
+])
+def test_fit_data_that_would_mislead_is_refused_in_one_line(tmp_path, header, row, said):
+    """Found by the attack: a column given twice was fitted to the second (silently wrong);
+    an inf cell crashed the fit."""
+    from sewfmu.scenarios.design.fit import read_data
+
+    data = tmp_path / "d.csv"
+    data.write_text(f"{header}\n0.0,{row.split(',', 1)[1]}\n{row}\n", encoding="utf-8")
+    with pytest.raises(sewfmu.ScenarioError, match=said):
+        read_data(data)

@@ -101,6 +101,8 @@ def _read_csv(path: Path) -> Data:
     for text in rows[0]:
         match = _HEADER_UNIT.match(text)
         name = (match.group(1) if match else text).strip()
+        if name in names:                   # the second would silently replace the first
+            raise ScenarioError(f"{path}: column {name!r} is given twice in the header")
         names.append(name)
         if match:
             units[name] = match.group(2).strip()
@@ -115,6 +117,10 @@ def _read_csv(path: Path) -> Data:
             except ValueError:
                 raise ScenarioError(f"{path}: line {i + 2}, column {names[j]}: not a number: "
                                     f"{cell!r}") from None
+            if math.isinf(values[i, j]):        # a measurement is finite (NaN: a missing one)
+                raise ScenarioError(f"{path}: line {i + 2}, column {names[j]}: {cell.strip()} "
+                                    f"is not a measurement (leave the cell empty for a missing "
+                                    f"one)")
     return _checked(str(path), {n: values[:, j] for j, n in enumerate(names)}, units)
 
 
