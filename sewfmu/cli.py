@@ -336,7 +336,7 @@ def main(argv=None) -> int:
                    help="override a parameter for every point")
     p.add_argument("--grid", action="append", metavar="INSTANCE.PARAM=V1,V2,...",
                    help="sweep this parameter over these values (adds to the file's grid)")
-    p.add_argument("--workers", type=_whole_number, help="local worker processes (default: all "
+    p.add_argument("--workers", type=console.whole_number, help="local worker processes (default: all "
                                                          "cores)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on a Dask cluster, e.g. tcp://127.0.0.1:8786")
@@ -397,16 +397,6 @@ def _positive_number(text: str) -> float:
     if not 0.0 < value < 1.0:
         raise argparse.ArgumentTypeError(f"expected a relative tolerance between 0 and 1, "
                                          f"got {text}")
-    return value
-
-
-def _whole_number(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
     return value
 
 

@@ -1,7 +1,9 @@
 """What the command line prints: key figures with their units and estimated errors, tables side
-by side, a sweep's failed points, and any error as one line that says what was wrong."""
+by side, a sweep's failed points, and any error as one line that says what was wrong; and the
+count type its options share (whole_number)."""
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 from importlib import metadata
@@ -118,3 +120,14 @@ def install_command(extra: str) -> str:
     where = unquote(urlparse(url).path)
     editable = "-e " if origin.get("dir_info", {}).get("editable") else ""
     return f"pip install {editable}\"{where}[{extra}]\""
+
+
+def whole_number(text: str) -> int:
+    """An argparse type: a count of at least 1 (workers, samples, evaluations)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
+    return value

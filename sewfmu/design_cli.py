@@ -3,11 +3,11 @@ Their options and what they print, each calling the API's function of its verb (
 sewfmu/cli.py's main adds them to its commands (a module of their own: cli.py's size)."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from sewfmu import api
+from sewfmu.console import whole_number
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
 
@@ -117,16 +117,6 @@ def _index(value) -> str:
     return "n/a" if value is None else f"{value:.3g}"
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
-    return value
-
-
 def add_commands(sub) -> None:
     """The three commands, on the command line's subparsers."""
     p = sub.add_parser("optimize", help="the parameters that meet a goal on a key figure")
@@ -146,9 +136,9 @@ def add_commands(sub) -> None:
     p.add_argument("--method", choices=("local", "global"), default="local",
                    help="local: brentq, bounded scalar, Nelder-Mead or SLSQP (default); "
                         "global: differential evolution, in parallel")
-    p.add_argument("--workers", type=_count, metavar="N",
+    p.add_argument("--workers", type=whole_number, metavar="N",
                    help="worker processes of the global method (default: all cores)")
-    p.add_argument("--max-evaluations", type=_count, metavar="N",
+    p.add_argument("--max-evaluations", type=whole_number, metavar="N",
                    help="stop after this many evaluations (default 200 local, 400 global)")
     p.add_argument("--out", metavar="DIR",
                    help="output folder (default: results/SCENARIO_optimize/); a study "
@@ -162,7 +152,7 @@ def add_commands(sub) -> None:
     p.add_argument("--free", action="append", required=True, metavar="INSTANCE.PARAM=LO..HI",
                    help="a parameter to fit and its range; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
-    p.add_argument("--max-evaluations", type=_count, metavar="N",
+    p.add_argument("--max-evaluations", type=whole_number, metavar="N",
                    help="least_squares' max_nfev (default 100)")
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/)")
     p.set_defaults(func=cmd_fit)
@@ -174,11 +164,11 @@ def add_commands(sub) -> None:
                    help="a key figure to analyze; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
-    p.add_argument("--samples", type=_count, metavar="N",
+    p.add_argument("--samples", type=whole_number, metavar="N",
                    help="Sobol: base samples N, a power of 2 "
                                                   "(N·(D+2) runs; default 64); Morris: "
                                                   "trajectories (N·(D+1) runs; default 16)")
-    p.add_argument("--workers", type=_count, metavar="N",
+    p.add_argument("--workers", type=whole_number, metavar="N",
                    help="local worker processes (default: all cores)")
     p.add_argument("--out", metavar="DIR",
                    help="output folder (default: results/SCENARIO_sensitivity/); a "
