@@ -14,7 +14,7 @@ from sewfmu._version import __version__
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "parameters",
            "scenarios",
            "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
-           "Diverged", "optimize", "fit", "sensitivity"]
+           "Diverged", "MissingExtra", "optimize", "fit", "sensitivity"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
@@ -22,6 +22,7 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
                                             "parameters", "Run", "Sweep", "Scenario", "ScenarioError",
                                             "InaccurateRun")},
          "Error": "sewfmu.errors",
+         "MissingExtra": "sewfmu.extras",
          "OutputError": "sewfmu.scenarios.files.outputs",
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
          "Diverged": "sewfmu.scenarios.cosim.divergence",

@@ -380,17 +380,9 @@ def build(fmi: int = 2, dest: str | Path | None = None,
 
 def _pandas():
     """pandas, or one line that says how to install it."""
-    try:
-        import pandas  # optional extra (pandas)
-    except ModuleNotFoundError:
-        from sewfmu.console import install_command  # only to say how to install it
+    from sewfmu.extras import require  # light; pandas itself only when asked for
 
-        raise MissingExtra(f"to_pandas() needs pandas: {install_command('pandas')}") from None
-    return pandas
-
-
-class MissingExtra(Error, ModuleNotFoundError):
-    """An optional package that a call needs is not installed."""
+    return require("pandas", "to_pandas()")
 
 
 def _frame(series, index: str):

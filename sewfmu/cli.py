@@ -229,13 +229,13 @@ def cmd_crosscheck(args) -> None:
 
 
 class _OneLineParser(argparse.ArgumentParser):
-    """A bad option is one line, as every other refusal (argparse would print its usage block);
-    `sewfmu COMMAND --help` shows the usage."""
+    """A bad option is one line and exit status 1, as every other refusal (argparse would print
+    its usage block and exit 2); `sewfmu COMMAND --help` shows the usage."""
 
     def error(self, message: str):
         command = self.prog.removeprefix("sewfmu").strip()
         where = f"{command}: " if command else ""
-        self.exit(2, f"sewfmu: error: {where}{message} (`sewfmu {command + ' ' if command else ''}"
+        self.exit(1, f"sewfmu: error: {where}{message} (`sewfmu {command + ' ' if command else ''}"
                      f"--help` shows the options)\n")
 
 

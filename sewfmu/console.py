@@ -4,12 +4,10 @@ count type its options share (whole_number)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from importlib import metadata
 from pathlib import Path
-from urllib.parse import unquote, urlparse
 
+from sewfmu.extras import EXTRAS, install_command  # noqa: F401  (install_command: the app's and the CLI's)
 from sewfmu.scenarios.format.values import label_of
 
 
@@ -95,31 +93,6 @@ def explain(err: Exception, command: str) -> str:
                f"or a shorter run needs less)"
     return (f"unexpected {type(err).__name__} during `sewfmu {command}`: {err} "
             f"(a bug in sewfmu: please report it; --debug shows where)")
-
-
-# the optional packages and the extra of pyproject.toml that installs each
-EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
-          "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
-          "pandas": "pandas", "SALib": "design"}
-
-
-def install_command(extra: str) -> str:
-    """The pip command that adds an extra to this sewfmu, from where it was installed: its
-    checkout (editable or not), its wheel, or the package index."""
-    # (a build's sewfmu.egg-info in the working folder is a distribution too, without origin)
-    found = [d.read_text("direct_url.json") for d in metadata.distributions(name="sewfmu")]
-    try:
-        origin = json.loads(next((t for t in found if t), "{}")) if found else None
-    except ValueError:
-        origin = {}
-    if origin is None:                    # not installed: running from a checkout
-        return f"pip install -e \".[{extra}]\" in sewfmu's checkout"
-    url = origin.get("url", "")
-    if not url.startswith("file://"):
-        return f"pip install \"sewfmu[{extra}]\""
-    where = unquote(urlparse(url).path)
-    editable = "-e " if origin.get("dir_info", {}).get("editable") else ""
-    return f"pip install {editable}\"{where}[{extra}]\""
 
 
 def whole_number(text: str) -> int:

@@ -18,6 +18,7 @@ for a rerun); "failed" (a worker process died or a task broke: tried again by a 
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import math
@@ -36,6 +37,7 @@ import numpy as np
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
+from sewfmu.scenarios.files.outputs import held, set_aside
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
@@ -230,11 +232,16 @@ class EvaluationLog:
         self.names, self.figures = names, figures
         self.rows: dict[str, Evaluation] = {}
         self.count = 0
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if path.exists():
-            self._read()
-        fresh = not path.exists() or path.stat().st_size == 0
-        self.file = open(path, "a", newline="", encoding="utf-8")
+        self._folder = contextlib.ExitStack()      # the folder is this study's while it runs
+        self._folder.enter_context(held(path.parent))
+        try:
+            if path.exists():
+                self._read()
+            fresh = not path.exists() or path.stat().st_size == 0
+            self.file = open(path, "a", newline="", encoding="utf-8")
+        except BaseException:
+            self._folder.close()
+            raise
         if fresh:
             self._write(self.columns)
         else:
@@ -246,8 +253,7 @@ class EvaluationLog:
             header = next(reader, None)
             if header != self.columns:
                 # another study's record (other parameters or figures): kept beside, not mixed
-                aside = self.path.with_name(f"{self.path.stem}.previous{self.path.suffix}")
-                os.replace(self.path, aside)
+                aside = set_aside(self.path)
                 _warn(f"{self.path} records other parameters or figures; moved to {aside.name}, "
                       f"and this study starts a new record")
                 return
@@ -301,6 +307,7 @@ class EvaluationLog:
 
     def close(self) -> None:
         self.file.close()
+        self._folder.close()
 
 
 def _cell(value) -> str:

@@ -30,7 +30,8 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.design.evaluations import one_line
-from sewfmu.scenarios.design.space import Variable
+from sewfmu.scenarios.design.fit_record import FitRecord
+from sewfmu.scenarios.design.space import Variable, evaluation_budget
 from sewfmu.scenarios.files.outputs import write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
@@ -175,48 +176,70 @@ def check_data(data: Data, scenario: Scenario, descriptions: Mapping,
 
 class _Model:
     """The scenario at points u of the free parameters' unit cube: its outputs at the data's
-    times. The last points are kept: least_squares asks for the optimum's again."""
+    times, from the fit's record where a run there is known (a resumed fit), else run now. The
+    last runs' whole series are kept: the plot draws the optimum's."""
 
-    def __init__(self, scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data):
+    def __init__(self, scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
+                 record: FitRecord | None = None):
         self.scenario, self.fmu_paths, self.free, self.data = scenario, fmu_paths, free, data
+        self.record = record
         self.spread = {c: (float(np.nanstd(v)) or float(np.nanmax(np.abs(v))) or 1.0)
                        for c, v in data.columns.items()}
         self.mask = {c: np.isfinite(v) for c, v in data.columns.items()}
-        self.cache: dict[tuple, tuple] = {}
-        self.runs, self.failures = 0, []
+        self.cache: dict[tuple, dict | None] = {}       # x -> the outputs at the data's times
+        self.whole: dict[tuple, tuple] = {}             # x -> (time, whole series), the last few
+        self.runs, self.reused, self.failures = 0, 0, []
 
     def x(self, u) -> tuple[float, ...]:
         return tuple(v.at(ui) for v, ui in zip(self.free, u))
 
-    def series(self, u):
-        """(run time, {column: values}) at the point, or None where the run fails."""
+    def at_data(self, u):
+        """{column: the model's values at the data's times} at the point, or None where the
+        run fails."""
         x = self.x(u)
-        if x not in self.cache:
-            sc = self.scenario.copy()
-            try:
-                for v, value in zip(self.free, x):
-                    sc.set_value(v.name, value, origin="fit")
-                result = run(sc, self.fmu_paths)
-                self.cache[x] = (result.time, {c: result[c] for c in self.data.columns})
-            except Error as err:
-                self.failures.append((x, one_line(err)))
-                self.cache[x] = None
-            self.runs += 1
-            if len(self.cache) > 64:
-                self.cache.pop(next(iter(self.cache)))
-        return self.cache[x]
+        if x in self.cache:
+            return self.cache[x]
+        known = self.record.known.get(self.record.key(x)) if self.record else None
+        if known is not None:
+            values, error = known
+            self.reused += 1
+            if values is None:
+                self.failures.append((x, error))
+        else:
+            values = self.run(x)
+            if self.record is not None:
+                self.record.add(x, values, "" if values is not None else self.failures[-1][1])
+        self.cache[x] = values
+        if len(self.cache) > 64:
+            self.cache.pop(next(iter(self.cache)))
+        return values
+
+    def run(self, x):
+        """Run at x: the outputs at the data's times (the whole series kept), None on failure."""
+        sc = self.scenario.copy()
+        self.runs += 1
+        try:
+            for v, value in zip(self.free, x):
+                sc.set_value(v.name, value, origin="fit")
+            result = run(sc, self.fmu_paths)
+        except Error as err:
+            self.failures.append((x, one_line(err)))
+            return None
+        series = {c: result[c] for c in self.data.columns}
+        self.whole[x] = (result.time, series)
+        if len(self.whole) > 4:
+            self.whole.pop(next(iter(self.whole)))
+        return {c: np.interp(self.data.time, result.time, v) for c, v in series.items()}
 
     def residuals(self, u) -> np.ndarray:
-        found = self.series(u)
+        found = self.at_data(u)
         parts = []
         for c, values in self.data.columns.items():
             m = self.mask[c]
             if found is None:
                 parts.append(np.full(int(m.sum()), FAILED_RESIDUAL))
                 continue
-            t, model = found
-            at = np.interp(self.data.time[m], t, model[c])
-            parts.append((at - values[m]) / self.spread[c])
+            parts.append((found[c][m] - values[m]) / self.spread[c])
         return np.concatenate(parts)
 
 
@@ -225,13 +248,20 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
     """Least squares over the free parameters (module docstring) of the scenario that
     check_data made; with `out`, fit.json and fit.png."""
     started = time.perf_counter()
-    model = _Model(scenario, fmu_paths, free, data)
-    u0 = np.array([v.fraction(v.start) for v in free])
-    if model.series(u0) is None:
-        raise ScenarioError(f"the first guess ({_point(free, model.x(u0))}) fails: "
-                            f"{model.failures[-1][1]}")
-    budget = max_evaluations or DEFAULT_EVALUATIONS
-    r = so.least_squares(model.residuals, u0, bounds=(0.0, 1.0), max_nfev=budget, **SETTINGS)
+    budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS)
+    record = FitRecord(out, scenario, fmu_paths, [v.name for v in free], data) \
+        if out is not None else None
+    try:
+        model = _Model(scenario, fmu_paths, free, data, record)
+        u0 = np.array([v.fraction(v.start) for v in free])
+        if model.at_data(u0) is None:
+            raise ScenarioError(f"the first guess ({_point(free, model.x(u0))}) fails: "
+                                f"{model.failures[-1][1]}")
+        r = so.least_squares(model.residuals, u0, bounds=(0.0, 1.0), max_nfev=budget,
+                             **SETTINGS)
+    finally:
+        if record is not None:
+            record.close()
     names = [v.name for v in free]
     estimates = dict(zip(names, model.x(r.x)))
     m, n = len(r.fun), len(free)
@@ -242,8 +272,10 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
-    best = model.series(r.x)
-    t_run, series = best
+    x_best = model.x(r.x)
+    if x_best not in model.whole:                  # found in the record: its series drawn anew
+        model.run(x_best)
+    t_run, series = model.whole[x_best]
     residuals = np.full(len(data.time), np.nan, dtype=[("time", "f8")]
                         + [(c, "f8") for c in data.columns])
     residuals["time"] = data.time
@@ -262,6 +294,7 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
         "correlation": {a: {b: _finite(corr[i, j]) for j, b in enumerate(names)}
                         for i, a in enumerate(names)},
         "converged": bool(r.success), "message": str(r.message), "evaluations": model.runs,
+        "reused_evaluations": model.reused,
         "failed_evaluations": [{"point": dict(zip(names, x)), "error": e}
                                for x, e in model.failures],
         "method": "least_squares", "settings": SETTINGS, "end_time": float(t_run[-1]),

@@ -31,12 +31,14 @@ from typing import Any
 import numpy as np
 from scipy import optimize as so
 
+from sewfmu.extras import require
 from sewfmu.scenarios.design.evaluations import OK, Evaluation, Evaluator
 from sewfmu.scenarios.design.space import (
     CONSTRAINT_TOLERANCE,
     Constraint,
     Goal,
     Variable,
+    evaluation_budget,
     figures_of_scenario,
 )
 from sewfmu.scenarios.files.outputs import write_atomic
@@ -84,9 +86,7 @@ class Optimum:
     summary: dict = field(default_factory=dict)          # what optimize.json holds
 
     def to_pandas(self):
-        import pandas as pd  # optional extra (pandas)
-
-        return pd.DataFrame(self.evaluations)
+        return require("pandas", "to_pandas()").DataFrame(self.evaluations)
 
     def __repr__(self) -> str:
         best = ", ".join(f"{k}={v:.6g}" for k, v in (self.best or {}).items())
@@ -159,9 +159,7 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
         workers = (os.cpu_count() or 1) if method == "global" else 1
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ScenarioError(f"--workers: a whole number >= 1, got {workers!r}")
-    budget = max_evaluations or DEFAULT_EVALUATIONS[method]
-    if isinstance(budget, bool) or not isinstance(budget, int) or budget < 2:
-        raise ScenarioError(f"max_evaluations: a whole number >= 2, got {budget!r}")
+    budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS[method])
     units = figures_of_scenario(scenario)
     started = time.perf_counter()
     evaluator = Evaluator(scenario, fmu_paths, [v.name for v in variables], list(units),

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from sewfmu.extras import require
 from sewfmu.scenarios.design.space import Variable
 from sewfmu.scenarios.files.outputs import write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
@@ -52,9 +53,7 @@ class Sensitivity:
     summary: dict = field(default_factory=dict)          # what sensitivity.json holds
 
     def to_pandas(self):
-        import pandas as pd  # optional extra (pandas)
-
-        return pd.DataFrame(self.table)
+        return require("pandas", "to_pandas()").DataFrame(self.table)
 
     def __repr__(self) -> str:
         return (f"<sewfmu.Sensitivity {self.scenario} ({self.method}): {self.runs} runs, "
@@ -63,23 +62,19 @@ class Sensitivity:
 
 def sample(method: str, problem: dict, samples: int) -> np.ndarray:
     if method == "sobol":
-        from SALib.sample import sobol  # optional extra (design)
-
+        sobol = require("SALib.sample.sobol", "a Sobol study")
         return sobol.sample(problem, samples, calc_second_order=False, seed=SEED)
-    from SALib.sample import morris  # optional extra (design)
-
+    morris = require("SALib.sample.morris", "a Morris study")
     return morris.sample(problem, samples, num_levels=MORRIS_LEVELS, seed=SEED)
 
 
 def analyze(method: str, problem: dict, X: np.ndarray, Y: np.ndarray) -> dict[str, np.ndarray]:
     if method == "sobol":
-        from SALib.analyze import sobol  # optional extra (design)
-
+        sobol = require("SALib.analyze.sobol", "a Sobol study")
         si = sobol.analyze(problem, Y, calc_second_order=False, conf_level=CONFIDENCE,
                            print_to_console=False, seed=SEED)
     else:
-        from SALib.analyze import morris  # optional extra (design)
-
+        morris = require("SALib.analyze.morris", "a Morris study")
         si = morris.analyze(problem, X, Y, conf_level=CONFIDENCE, print_to_console=False,
                             num_levels=MORRIS_LEVELS, seed=SEED)
     return {k: np.asarray(si[k], dtype=float) for k in INDICES[method]}

@@ -13,6 +13,8 @@ import re
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
+import numpy as np
+
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.units import UnitError
 from sewfmu.scenarios.analyses import figure_units
@@ -55,7 +57,10 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
     """The variables of `ranges` ({"instance.parameter": "LO..HI unit" or (lo, hi)}), each
     checked: a parameter of the scenario, a real number, bounds in order and within the range its
     FMU declares (`descriptions`: instance -> modelDescription)."""
-    if not isinstance(ranges, Mapping) or not ranges:
+    if not isinstance(ranges, Mapping):
+        raise ScenarioError(f"{option}: expected {{\"instance.parameter\": (low, high)}} (a "
+                            f"dict: each parameter and its two bounds), got {short(ranges)}")
+    if not ranges:
         raise ScenarioError(f"{option}: nothing to vary: give at least one "
                             f"instance.parameter=LO..HI")
     out = []
@@ -111,6 +116,8 @@ def _bounds(spec: Any, where: str) -> tuple[Any, Any]:
         lo_unit, hi_unit = lo_unit or hi_unit, hi_unit or lo_unit      # "800..1200 rpm"
         return (f"{lo} {lo_unit}" if lo_unit else float(lo),
                 f"{hi} {hi_unit}" if hi_unit else float(hi))
+    if isinstance(spec, np.ndarray) and spec.ndim == 1:        # np.array([lo, hi]): numbers
+        spec = spec.tolist()
     if isinstance(spec, (tuple, list)) and len(spec) == 2:
         return spec[0], spec[1]
     raise ScenarioError(f"{where}: expected (low, high) or \"LO..HI unit\", got {short(spec)}")
@@ -273,3 +280,16 @@ def constraints_of(known: Mapping[str, str], given: Sequence | None) -> list[Con
         out.append(Constraint(str(figure), op, figure_value(value, known[figure], where, figure),
                               known[figure]))
     return out
+
+
+def evaluation_budget(max_evaluations: Any, default: int) -> int:
+    """A study's budget of evaluations: None is the default; otherwise a whole number >= 1 (the
+    command line's --max-evaluations takes the same), never 0 read as "the default"."""
+    if max_evaluations is None:
+        return default
+    if isinstance(max_evaluations, (np.integer,)):
+        max_evaluations = int(max_evaluations)
+    if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, int) \
+            or max_evaluations < 1:
+        raise ScenarioError(f"max_evaluations: a whole number >= 1, got {short(max_evaluations)}")
+    return max_evaluations

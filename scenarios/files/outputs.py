@@ -20,6 +20,11 @@ import re
 import shutil
 from pathlib import Path
 
+try:
+    import fcntl
+except ImportError:                  # Windows: no flock; a folder is then not guarded
+    fcntl = None
+
 from sewfmu.errors import Error
 
 # sewfmu's own temporaries, `.NAME.sewfmu-PID.tmp|partial`: only these are ever cleaned up
@@ -170,3 +175,49 @@ def folder_for(base: Path, label: str) -> Path:
     if Path(base).resolve() not in folder.resolve().parents:
         raise OutputError(f"{label!r} cannot be a folder inside {base}")
     return folder
+
+
+@contextlib.contextmanager
+def held(folder: Path):
+    """The folder for this study or sweep alone while the block runs: a second one into it is
+    refused in one line, since both would append to the same resume record and mix their lines.
+    The lock is on the folder itself (flock): it leaves no file behind, and a killed process's
+    lock goes with it."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    if fcntl is None:
+        yield
+        return
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise OutputError(f"{folder}: another sewfmu sweep or study is writing into this folder "
+                              f"now; "
+                              f"give another output folder, or run this one when it has "
+                              f"ended") from None
+        yield
+    finally:
+        os.close(fd)
+
+
+def set_aside(path: Path) -> Path:
+    """Move a file out of the way under the first free name NAME.previous[-N].EXT beside it,
+    never over a file that is there (an earlier one set aside, or the user's own)."""
+    path = Path(path)
+    for n in range(1, 10000):
+        aside = path.with_name(f"{path.stem}.previous{'' if n == 1 else f'-{n}'}{path.suffix}")
+        try:
+            os.link(path, aside)        # fails where the name is taken: nothing is overwritten
+        except FileExistsError:
+            continue
+        except OSError:                 # a file system without hard links
+            if aside.exists():
+                continue
+            os.rename(path, aside)
+            return aside
+        os.unlink(path)
+        return aside
+    raise OutputError(f"{path}: 9999 earlier records are set aside beside it already; move "
+                      f"them away")

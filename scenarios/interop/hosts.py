@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from sewfmu.errors import Error
+from sewfmu.extras import require
 
 HOSTS = ("libcosim", "ecos", "ecos-cli")
 
@@ -32,6 +33,7 @@ class HostError(Error, RuntimeError):
 
 
 def _run_libcosim(ssp: str, step: float, stop: float, record: list[str]):
+    require("libcosimpy", "a run in libcosim")        # or one line naming the extra
     from libcosimpy.CosimEnums import CosimVariableType  # optional extra (interop)
     from libcosimpy.CosimExecution import CosimExecution  # optional extra (interop)
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level  # optional extra (interop)
@@ -92,6 +94,7 @@ def _load_tbb() -> None:
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
     from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
+    require("ecospy", "a run in ecos")                # or one line naming the extra
     _load_tbb()
     from ecospy import EcosSimulation  # optional extra (interop)
 

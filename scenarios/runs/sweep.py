@@ -26,7 +26,8 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
-from sewfmu.scenarios.files.outputs import folder_for, remove_debris, write_atomic
+from sewfmu.extras import require
+from sewfmu.scenarios.files.outputs import folder_for, held, remove_debris, write_atomic
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
@@ -240,26 +241,27 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         check_parameters(probe, {inst.name: extracted_fmu(Path(paths[inst.fmu]))[1]
                                  for inst in probe.instances.values()})
     out_dir.mkdir(parents=True, exist_ok=True)
-    remove_debris(out_dir, recursive=True)
-    settings = settings_of(scenario, paths)
-    keys = {p.index: p.identity(settings) for p in points}
-    done = finished_points(out_dir)
-    # longest first: the last points to finish are then short ones, and the workers end together
-    todo = sorted((p for p in points if keys[p.index] not in done),
-                  key=lambda p: -_cost(scenario, p))
-    results_dir = str(out_dir / "points") if keep_results else None
-    rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
-    bar = _progress(len(points), len(rows), progress, scenario.name)
-    with _open_log(out_dir / POINTS_FILE) as log:
-        for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
-            log.write((json.dumps(row) + "\n").encode("utf-8"))
-            log.flush()
-            rows[row["key"]] = row
-            bar.update(1)
-    bar.close()
-    ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
-    _write_table(ordered, [name for name, _ in points[0].values], out_dir / TABLE_FILE)
-    return ordered
+    with held(out_dir):         # its record is this sweep's alone while it runs
+        remove_debris(out_dir, recursive=True)
+        settings = settings_of(scenario, paths)
+        keys = {p.index: p.identity(settings) for p in points}
+        done = finished_points(out_dir)
+        # longest first: the last points to finish are then short ones, and the workers end together
+        todo = sorted((p for p in points if keys[p.index] not in done),
+                      key=lambda p: -_cost(scenario, p))
+        results_dir = str(out_dir / "points") if keep_results else None
+        rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
+        bar = _progress(len(points), len(rows), progress, scenario.name)
+        with _open_log(out_dir / POINTS_FILE) as log:
+            for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
+                log.write((json.dumps(row) + "\n").encode("utf-8"))
+                log.flush()
+                rows[row["key"]] = row
+                bar.update(1)
+        bar.close()
+        ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
+        _write_table(ordered, [name for name, _ in points[0].values], out_dir / TABLE_FILE)
+        return ordered
 
 
 def _execute(scenario, todo, keys, results_dir, workers, scheduler):
@@ -267,7 +269,8 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
     if not todo:
         return
     if scheduler:
-        from distributed import Client, as_completed  # optional extra (dask)
+        distributed = require("distributed", "a sweep on a Dask scheduler")
+        Client, as_completed = distributed.Client, distributed.as_completed
         with Client(scheduler) as client:
             # the scenario goes to every worker once, not with every point; the points go in
             # batches, a few per worker slot, so that a point costs its run and not a task's
