@@ -410,11 +410,12 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
              target: Mapping[str, Any] | None = None, constraints: list | None = None,
              set: Mapping[str, Any] | None = None, method: str = "local",
              workers: int | None = None, out: str | Path | None = None, plot: bool = False,
-             max_evaluations: int | None = None):
+             max_evaluations: int | None = None, progress: bool = False):
     """`sewfmu optimize`: vary {"inst.param": (lo, hi) or "LO..HI unit"}, one of
     minimize=FIGURE, maximize=FIGURE, target={FIGURE: value}; constraints ["FIGURE>=VALUE unit"].
     An Optimum (.best, .figures, .evaluations, .converged); with `out` evaluations.csv (a rerun
-    there resumes), optimize.json, with `plot` convergence.png."""
+    there resumes), optimize.json, with `plot` convergence.png. `progress` shows a bar on the
+    terminal."""
     from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
@@ -426,15 +427,16 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
     if plot and out is None:
         raise ScenarioError("plot is a file: give out= a folder for it")
     return design.optimize(sc, paths, variables, goal, limits, method, workers, out, plot,
-                           max_evaluations)
+                           max_evaluations, progress)
 
 
 def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
         set: Mapping[str, Any] | None = None, out: str | Path | None = None,
-        max_evaluations: int | None = None):
+        max_evaluations: int | None = None, progress: bool = False):
     """`sewfmu fit`: data a CSV file (a `time` column, columns named like recorded outputs) or a
     structured array; free {"inst.param": (lo, hi)}. A Fit (.estimates, .standard_errors,
-    .residuals); with `out` fit.json and fit.png."""
+    .residuals); with `out` fit.json, fit.png and fit_evaluations.jsonl (a rerun there
+    resumes). `progress` shows a bar on the terminal."""
     from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
@@ -443,7 +445,7 @@ def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
     ends = {"experiment.stop_time", "experiment.revolutions"}
     sc = design.check_data(measured, sc, described, keep_end=bool(ends & {*(set or {})}))
     free = space.variables(sc, free, described, option="--free")
-    return design.fit(sc, paths, free, measured, out, True, max_evaluations)
+    return design.fit(sc, paths, free, measured, out, True, max_evaluations, progress)
 
 
 def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],

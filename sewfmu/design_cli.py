@@ -55,7 +55,7 @@ def cmd_optimize(args) -> None:
                      target={k.strip(): v.strip() for k, v in target.items()} if target else None,
                      constraints=args.constraint, set=_sets(args.set), method=args.method,
                      workers=args.workers, out=out, plot=args.plot,
-                     max_evaluations=args.max_evaluations)
+                     max_evaluations=args.max_evaluations, progress=not args.quiet)
     if not o.feasible:
         _warn("no evaluated point meets every constraint: the one closest to meeting them "
               "is shown")
@@ -82,7 +82,7 @@ def cmd_optimize(args) -> None:
 def cmd_fit(args) -> None:
     out = Path(args.out) if args.out else Path("results") / f"{Path(args.scenario).stem}_fit"
     f = api.fit(args.scenario, args.data, _ranges(args.free, "--free"), set=_sets(args.set),
-                out=out, max_evaluations=args.max_evaluations)
+                out=out, max_evaluations=args.max_evaluations, progress=not args.quiet)
     if not f.converged:
         _warn(f"least_squares did not converge ({f.message})")
     print(f"{f.scenario}: fit to {args.data} in {f.evaluations} runs; results in {out}/")
@@ -144,6 +144,7 @@ def add_commands(sub) -> None:
                    help="output folder (default: results/SCENARIO_optimize/); a study "
                                  "run again into it resumes")
     p.add_argument("--plot", action="store_true", help="convergence.png")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_optimize)
     p = sub.add_parser("fit", help="parameters learnt from measured time series")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")
@@ -154,7 +155,9 @@ def add_commands(sub) -> None:
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--max-evaluations", type=whole_number, metavar="N",
                    help="least_squares' max_nfev (default 100)")
-    p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/); "
+                                                "a fit run again into it resumes")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_fit)
     p = sub.add_parser("sensitivity", help="which parameters matter to key figures (SALib)")
     p.add_argument("scenario", help="catalogue name or path to a .toml file")

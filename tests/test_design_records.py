@@ -181,3 +181,31 @@ def _trace_file(tmp_path: Path) -> Path:
     if not path.exists():
         _trace(path)
     return path
+
+
+class _Terminal:
+    """stderr as a terminal: tqdm draws its bar (it stays silent where stderr is a file)."""
+
+    def __init__(self):
+        self.text = ""
+
+    def write(self, text):
+        self.text += text
+
+    def flush(self):
+        pass
+
+    def isatty(self):
+        return True
+
+
+def test_optimize_and_fit_show_their_runs_on_a_terminal(monkeypatch, tmp_path):
+    terminal = _Terminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"}, minimize="F2_peak",
+                    set=SHORT, max_evaluations=3, progress=True)
+    assert "optimize punch_drive" in terminal.text and "/3 [" in terminal.text
+    terminal.text = ""
+    sewfmu.fit("punch_drive", data=_trace_file(tmp_path), free={"punch.b2": "20..300"},
+               max_evaluations=2, progress=True)
+    assert "fit punch_drive" in terminal.text and "run" in terminal.text

@@ -59,6 +59,15 @@ class Evaluation:
     reused: bool = False                   # found in the record, not run now
 
 
+def progress_bar(enabled: bool, what: str, total: int | None):
+    """A study's runs on one line of stderr, on a terminal only (tqdm), or None."""
+    if not enabled:
+        return None
+    from tqdm import tqdm  # only when a bar is shown
+
+    return tqdm(total=total, desc=what, unit="run", disable=None, leave=False)
+
+
 def one_line(err: BaseException) -> str:
     return " ".join(str(err).split()) or type(err).__name__
 
@@ -83,7 +92,8 @@ class Evaluator:
     once: from the record of an earlier run into the same folder, or now."""
 
     def __init__(self, scenario: Scenario, fmu_paths: dict, names: Sequence[str],
-                 figures: Sequence[str], folder: Path | None = None, workers: int = 1):
+                 figures: Sequence[str], folder: Path | None = None, workers: int = 1,
+                 bar=None):
         self.scenario, self.fmu_paths = scenario, dict(fmu_paths)
         self.names, self.figures = list(names), list(figures)
         self.workers = workers
@@ -96,6 +106,7 @@ class Evaluator:
         self.computed = 0
         self.run_seconds = 0.0
         self.pool: WorkerPool | None = None
+        self.bar = bar                             # a progress bar: update(1) a point asked
 
     def key(self, values: Sequence[float]) -> str:
         return Point(0, tuple(zip(self.names, values))).identity(self.settings)
@@ -142,13 +153,19 @@ class Evaluator:
             self.known[evaluation.key] = evaluation
         else:                                    # not known: a failed point is tried again
             self.history.append(evaluation)
+            self._counted()
 
     def _asked_for(self, key: str) -> Evaluation:
         evaluation = self.known[key]
         if key not in self._asked:
             self._asked.add(key)
             self.history.append(evaluation)
+            self._counted()
         return evaluation
+
+    def _counted(self) -> None:
+        if self.bar is not None:
+            self.bar.update(1)
 
     def table(self, extra: dict[str, list] | None = None):
         """This study's evaluations as a numpy structured array: the parameters and figures
@@ -169,6 +186,8 @@ class Evaluator:
         return data
 
     def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
         if self.pool is not None:
             self.pool.close()
         if self.log is not None:

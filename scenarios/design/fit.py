@@ -29,7 +29,7 @@ from scipy import optimize as so
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
-from sewfmu.scenarios.design.evaluations import one_line
+from sewfmu.scenarios.design.evaluations import one_line, progress_bar
 from sewfmu.scenarios.design.fit_record import FitRecord
 from sewfmu.scenarios.design.space import Variable, evaluation_budget
 from sewfmu.scenarios.files.outputs import write_atomic
@@ -180,9 +180,9 @@ class _Model:
     last runs' whole series are kept: the plot draws the optimum's."""
 
     def __init__(self, scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
-                 record: FitRecord | None = None):
+                 record: FitRecord | None = None, bar=None):
         self.scenario, self.fmu_paths, self.free, self.data = scenario, fmu_paths, free, data
-        self.record = record
+        self.record, self.bar = record, bar
         self.spread = {c: (float(np.nanstd(v)) or float(np.nanmax(np.abs(v))) or 1.0)
                        for c, v in data.columns.items()}
         self.mask = {c: np.isfinite(v) for c, v in data.columns.items()}
@@ -210,6 +210,8 @@ class _Model:
             if self.record is not None:
                 self.record.add(x, values, "" if values is not None else self.failures[-1][1])
         self.cache[x] = values
+        if self.bar is not None:
+            self.bar.update(1)
         if len(self.cache) > 64:
             self.cache.pop(next(iter(self.cache)))
         return values
@@ -244,15 +246,17 @@ class _Model:
 
 
 def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
-        out: Path | None = None, plot: bool = True, max_evaluations: int | None = None) -> Fit:
+        out: Path | None = None, plot: bool = True, max_evaluations: int | None = None,
+        progress: bool = False) -> Fit:
     """Least squares over the free parameters (module docstring) of the scenario that
     check_data made; with `out`, fit.json and fit.png."""
     started = time.perf_counter()
     budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS)
     record = FitRecord(out, scenario, fmu_paths, [v.name for v in free], data) \
         if out is not None else None
+    bar = progress_bar(progress, f"fit {scenario.name}", None)
     try:
-        model = _Model(scenario, fmu_paths, free, data, record)
+        model = _Model(scenario, fmu_paths, free, data, record, bar)
         u0 = np.array([v.fraction(v.start) for v in free])
         if model.at_data(u0) is None:
             raise ScenarioError(f"the first guess ({_point(free, model.x(u0))}) fails: "
@@ -260,6 +264,8 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
         r = so.least_squares(model.residuals, u0, bounds=(0.0, 1.0), max_nfev=budget,
                              **SETTINGS)
     finally:
+        if bar is not None:
+            bar.close()
         if record is not None:
             record.close()
     names = [v.name for v in free]

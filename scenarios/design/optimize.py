@@ -32,7 +32,7 @@ import numpy as np
 from scipy import optimize as so
 
 from sewfmu.extras import require
-from sewfmu.scenarios.design.evaluations import OK, Evaluation, Evaluator
+from sewfmu.scenarios.design.evaluations import OK, Evaluation, Evaluator, progress_bar
 from sewfmu.scenarios.design.space import (
     CONSTRAINT_TOLERANCE,
     Constraint,
@@ -150,7 +150,7 @@ class _Problem:
 def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goal: Goal,
              constraints: list[Constraint], method: str = "local", workers: int | None = None,
              out: Path | None = None, plot: bool = False,
-             max_evaluations: int | None = None) -> Optimum:
+             max_evaluations: int | None = None, progress: bool = False) -> Optimum:
     """Optimize the goal under the constraints over the variables' ranges (module docstring);
     with `out`, evaluations.csv as the points run, optimize.json and with `plot` convergence.png."""
     if method not in METHODS:
@@ -163,7 +163,8 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
     units = figures_of_scenario(scenario)
     started = time.perf_counter()
     evaluator = Evaluator(scenario, fmu_paths, [v.name for v in variables], list(units),
-                          Path(out) if out is not None else None, workers)
+                          Path(out) if out is not None else None, workers,
+                          progress_bar(progress, f"optimize {scenario.name}", budget))
     problem = _Problem(variables, goal, constraints, evaluator, budget)
     try:
         if goal.sense != "target":          # min and max relative to the start: one scale
