@@ -24,6 +24,7 @@ VARY = {"punch.F10": "15..40 N", "punch.c2": "2e4..1.5e5 N/m"}
 # the figures at F10 = 30 N, c2 = 80 000 N/m: a point the optimization must find
 TARGET = {"F2_weld_mean": "34.734 N", "contact_duration_deg": "145.555 deg"}
 PROCESSES = 5                      # points run as `sewfmu run` processes
+GLOBAL_POINTS = 80                 # the global method's budget (4 generations of 20)
 
 
 def optimization() -> tuple[float, object]:
@@ -69,6 +70,47 @@ def processes(points) -> float:
     return time.perf_counter() - start
 
 
+def global_study(workers: int) -> tuple[float, object]:
+    with tempfile.TemporaryDirectory() as out:
+        start = time.perf_counter()
+        found = sewfmu.optimize("punch_drive", vary=VARY, target=TARGET, set=SET, out=out,
+                                method="global", workers=workers, max_evaluations=GLOBAL_POINTS)
+        return time.perf_counter() - start, found
+
+
+def sweep_of(points, workers: int) -> float:
+    """A plain sweep of the same points on as many workers: what the study's batches are."""
+    from sewfmu.scenarios.runs.sweep import Point, run_sweep
+
+    scenario = sewfmu.load("punch_drive", set=SET)
+    todo = [Point(i, (("punch.F10", a), ("punch.c2", b))) for i, (a, b) in enumerate(points)]
+    with tempfile.TemporaryDirectory() as out:
+        start = time.perf_counter()
+        run_sweep(scenario, todo, Path(out), workers=workers, progress=False)
+        return time.perf_counter() - start
+
+
+def parallel() -> None:
+    """The global method on one worker and on two, and a plain sweep of its points on two."""
+    one, found = global_study(1)
+    two, found2 = global_study(2)
+    assert found.best == found2.best           # the answer does not depend on the workers
+    points = [(float(a), float(b)) for a, b in zip(found.evaluations["punch.F10"],
+                                                     found.evaluations["punch.c2"])]
+    swept = sweep_of(points, 2)
+    floor = bare(points)
+    n = len(points)
+    print(f"\nglobal method (differential evolution), {n} evaluations:")
+    print("| what | wall [s] | evaluations/s |\n|---|---|---|")
+    print(f"| 1 worker | {one:.2f} | {n / one:.2f} |")
+    print(f"| 2 workers | {two:.2f} | {n / two:.2f} |")
+    print(f"| a plain sweep of the same points, 2 workers | {swept:.2f} | {n / swept:.2f} |")
+    print(f"| the run loop and analysis alone over them (floor, 1 process) | {floor:.2f} | "
+          f"{n / floor:.2f} |")
+    print(f"2 workers over 1: {one / two:.2f} x; the study on 1 worker over the floor: "
+          f"{one / floor:.2f}, on 2 over the plain sweep: {two / swept:.2f} (1 = no overhead)")
+
+
 def main():
     sewfmu.run("punch_drive", set=SET)        # FMUs built and loaded outside the timing
     walls, loops, floors = [], [], []
@@ -92,6 +134,7 @@ def main():
     print(f"optimization over the sewfmu.run loop: {wall / plain:.2f}; over the floor: "
           f"{wall / floor:.2f} (1 = no overhead); a process per point over an evaluation: "
           f"{own / (wall / n):.2f}")
+    parallel()
     print(f"measured {time.strftime('%Y-%m-%d')} on {os.cpu_count()} CPUs, load "
           f"{os.getloadavg()[0]:.1f}")
 
