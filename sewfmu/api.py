@@ -97,7 +97,10 @@ class Run:
 
     summary: what summary.json holds (key figures, master, step, provenance...).
     series: numpy structured array, a `time` field and one `instance.variable` field per
-    recorded output; units: the unit of every column and key figure ("" for none)."""
+    recorded output; units: the unit of every column and key figure ("" for none).
+    A study scenario (carriage_resonance, feed_ratio, takeup_tolerance) is computed, not
+    co-simulated: its headline figures are the key figures, `study` holds all of it (what
+    study.json holds) and there is no time series."""
     name: str
     summary: dict
     series: Any
@@ -105,6 +108,13 @@ class Run:
     out: Path | None = None
     runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
     shaft: str | None = None                  # the MainShaft whose turns revolution() counts
+    study: dict | None = None                 # a study scenario's whole result
+
+    def _recorded(self, what: str):
+        if self.series is None:
+            raise ScenarioError(f"{self.name} is a study, computed rather than co-simulated: "
+                                f"it has no time series for {what}; Run.study holds its result")
+        return self.series
 
     @property
     def figures(self) -> dict:
@@ -117,20 +127,22 @@ class Run:
 
     def to_pandas(self):
         """The time series as a pandas DataFrame indexed by time (pandas must be installed)."""
-        return _frame(self.series, index="time")
+        return _frame(self._recorded("to_pandas()"), index="time")
 
     def revolution(self, k: int = -1):
         """The k-th whole revolution of the shaft (k=-1 the last): a structured array with
         `crank_deg` in [0, 360), increasing (no wrap-around), and the recorded fields."""
         from sewfmu.scenarios.runs.revolution import revolution  # numpy: not at `import sewfmu`
 
-        return revolution(self.series, f"{self.shaft or 'shaft'}.phi", k, self.name)
+        return revolution(self._recorded("revolution()"), f"{self.shaft or 'shaft'}.phi", k,
+                          self.name)
 
     def __repr__(self) -> str:
         if self.runs:
             return f"<sewfmu.Run {self.name}: {len(self.runs)} runs {list(self.runs)}>"
         shown = ", ".join(f"{k}={_short(v)}" for k, v in list(self.figures.items())[:4])
-        return f"<sewfmu.Run {self.name}: {len(self.series)} samples; {shown}>"
+        what = "a study" if self.series is None else f"{len(self.series)} samples"
+        return f"<sewfmu.Run {self.name}: {what}; {shown}>"
 
 
 def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
@@ -152,6 +164,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     out, fmu_dir = _folder(out, "out"), _folder(fmu_dir, "fmu_dir")
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
+    if sc.study:
+        return _study_run(sc, out, plot, animate, report)
     bar = TerminalProgress(sc.name) if progress else None
     try:
         runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, bar)
@@ -176,6 +190,20 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
                             f"shorter experiment.step (or another master), or accept it with "
                             f"experiment.accept_error = true", made)
     return made
+
+
+def _study_run(sc: Scenario, out, plot: bool, animate: bool, report: bool) -> Run:
+    from sewfmu.scenarios.runs.studies import run_study  # loaded on first use (start-up time)
+
+    if animate:
+        raise ScenarioError(f"animate: the study {sc.name} is computed, not a run of the "
+                            f"mechanism; run a scenario (sewfmu scenarios) to see one move")
+    try:
+        data, summary = run_study(sc, Path(out) if out is not None else None, plot, report)
+    except OSError as err:
+        raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
+    return Run(sc.name, summary, None, dict(summary["units"]),
+               Path(out) if out is not None else None, study=data)
 
 
 def _run_of(name: str, result, summary: dict, out: Path | None, shaft: str | None) -> Run:
@@ -289,7 +317,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         if out is not None and (plot or report):
             sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
-    units.update({"stop_time": "s", "wall_time_s": "s", **figure_units(sc.analysis)})
+    units.update({"stop_time": "s", "wall_time_s": "s", **figure_units(sc.analysis, sc.study)})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
 
@@ -343,7 +371,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, (int, float))
                              or not 0.0 < rtol < 1.0):
         raise ScenarioError(f"rtol: expected a relative tolerance between 0 and 1, got {rtol!r}")
-    units = {**figure_units(sc.analysis), "wall_time_s": "s"}
+    units = {**figure_units(sc.analysis, sc.study), "wall_time_s": "s"}
     out = {}
     for row in compare_rows(sc, rtol=rtol):
         if rtol is None:

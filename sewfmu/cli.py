@@ -36,8 +36,6 @@ def cmd_build(args) -> None:
 
 def cmd_list(args) -> None:
     from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.analyses import studies  # loaded on first use (start-up time)
-
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
         doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__
@@ -45,26 +43,9 @@ def cmd_list(args) -> None:
     print("scenarios:")
     for name in api.scenarios():
         print(f"  {name:18s} {api.load(name).description}")
-    print("studies:")
-    for name, (_, study) in sorted(studies().items()):
-        print(f"  {name:18s} {study.description}")
 
 
 def cmd_run(args) -> None:
-    from sewfmu.scenarios.analyses import studies  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.results import run_study  # loaded on first use (start-up time)
-
-    if args.scenario in studies():
-        if args.set:
-            raise ScenarioError(f"--set: the study {args.scenario} takes no settings")
-        out = Path(args.out) if args.out else Path("results") / args.scenario
-        if args.animate:
-            raise ScenarioError(f"--animate: the study {args.scenario} is not a run of a "
-                                f"mechanism; run a scenario to see one move")
-        summary = run_study(args.scenario, out, plot=args.plot, report=args.report)
-        print(f"{args.scenario}: results in {out}/")
-        print("  " + ", ".join(f"{k} = {console.fmt(v)}" for k, v in summary.items()))
-        return
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
     try:

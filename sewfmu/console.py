@@ -27,12 +27,13 @@ def print_run(name: str, run, out: Path) -> None:
         errors = each.summary.get("coupling_error") or {}
         physics = {k: v for k, v in each.figures.items()
                    if k != "wall_time_s" and not k.startswith("master_")}
+        width = max([24] + [len(k) for k in physics])
         for key, value in physics.items():
             unit = each.units.get(key, "").replace("1", "") if each.units.get(key) == "1" \
                 else each.units.get(key, "")
             error = errors.get("figures", {}).get(key)
             spread = f"  ± {fmt(error)} {unit}".rstrip() if error is not None else ""
-            print(f"    {key:24s} {fmt(value):>12s} {unit:4s}{spread}")
+            print(f"    {key:{width}s} {fmt(value):>12s} {unit:4s}{spread}")
         done = {k: v for k, v in each.figures.items() if k not in physics}
         if errors.get("none"):
             print(f"    (no coupling error estimated: {errors['none']})")
@@ -40,7 +41,8 @@ def print_run(name: str, run, out: Path) -> None:
             how = f"no estimate ({errors['failed']})" if errors.get("failed") else \
                 f"from {errors['method']}"
             print(f"    (± : the estimated coupling error, {how})")
-        print("    " + ", ".join(f"{k} = {fmt(v)}" for k, v in done.items()))
+        if done:
+            print("    " + ", ".join(f"{k} = {fmt(v)}" for k, v in done.items()))
     if out.is_dir():
         written = sorted(str(p.relative_to(out)) for p in out.rglob("*")
                          if p.is_file() and not p.name.startswith("."))

@@ -27,14 +27,16 @@ from sewfmu.errors import Error
 
 @dataclass(frozen=True)
 class Study:
-    """An evaluation of a model over parameter sets (not a co-simulation): `compute()` returns
-    the whole study, `plot(study, path)` draws it, `headline(study)` its headline figures,
-    whose units are `units`."""
+    """An evaluation of a model over parameter sets (not a co-simulation): `compute(given)`
+    returns the whole study for the design `given` sets ({role: {parameter: value}}, the
+    scenario's values of the instances that play `roles`; {} is the defaults), `plot(study,
+    path)` draws it, `headline(study)` its headline figures, numbers whose units are `units`."""
     description: str
-    compute: Callable[[], dict]
+    compute: Callable[[dict], dict]
     plot: Callable[[dict, object], None]
     headline: Callable[[dict], dict]
     units: dict[str, str] = field(default_factory=dict)
+    roles: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -75,7 +77,7 @@ class Mechanism:
 
 # what a summary says of the run itself rather than of the mechanism
 RUN_KEYS = ("scenario", "master", "step", "stop_time", "provenance", "units", "runs", "compare",
-            "coupling_error")
+            "coupling_error", "study")
 
 
 def figures_of(summary: dict) -> dict:
@@ -104,9 +106,13 @@ def mechanism(analysis: str) -> Mechanism:
     return known[analysis]
 
 
-def figure_units(analysis: str | None) -> dict[str, str]:
-    """The units of an analysis's key figures ({} for a run without an analysis)."""
-    return dict(mechanism(analysis).figures) if analysis else {}
+def figure_units(analysis: str | None, study: str | None = None) -> dict[str, str]:
+    """The units of an analysis's key figures, or of its study's headline figures ({} for a run
+    without an analysis)."""
+    if not analysis:
+        return {}
+    found = mechanism(analysis)
+    return dict(found.studies[study].units if study else found.figures)
 
 
 def studies() -> dict[str, tuple[str, Study]]:

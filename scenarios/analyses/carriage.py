@@ -11,10 +11,16 @@ from __future__ import annotations
 
 import math
 import textwrap
+from typing import Mapping
 
 import numpy as np
 
-from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams
+from sewfmu.components.carriage import (
+    CarriageDrive,
+    CarriageDriveParams,
+    CarriageModal,
+    CarriageParams,
+)
 from sewfmu.components.oscillator import DampedOscillator
 from sewfmu.components.parameters import with_values
 from sewfmu.scenarios.analyses import (
@@ -33,13 +39,10 @@ FIGURES = {"omega1": "rad/s", "omega2": "rad/s", "stitch_rate_per_min": "1/min",
            "peak_abs_U2_last_stitch_um": "um", "peak_abs_U2_um": "um"}
 
 RATES = tuple(600.0 + 20.0 * k for k in range(71))      # stitches/min, 600 to 2000
-MACHINE_RATE = 1600.0
+MACHINE_RATE = 1600.0                                    # the catalogue's shaft speed
 STEPS_PER_STITCH = 360
-DESIGNS = {
-    "paper's carriage": {},
-    "traverse twice as stiff (EJ × 2)": {"EJ": 2 * 2604.0},
-    "shorter cantilever (l = 0.415 m)": {"l": 0.415},
-}
+# the carriage as the scenario sets it, and the paper's two remedies relative to it
+STIFFER, SHORTER = "traverse twice as stiff (EJ × 2)", "cantilever 0.1 m shorter"
 
 
 def summary_of_run(result) -> dict:
@@ -120,23 +123,38 @@ def periodic_response(model: CarriageModal, drive: CarriageDrive, rate_per_min: 
     return t, np.asarray(model.modes) @ q[:, 0, :]
 
 
-def resonance_study() -> dict:
-    drive = CarriageDrive()
+def resonance_study(given: Mapping[str, Mapping] | None = None) -> dict:
+    """The steady-state peak |U2| over RATES for the carriage as `given` sets it ({role:
+    {parameter: value}}: carriage, drive, and the shaft's omega0 as the machine's stitch rate)
+    and for the paper's two remedies applied to it."""
+    given = given or {}
+    carriage = with_values(CarriageParams(), **given.get("carriage", {}))
+    drive = CarriageDrive(with_values(CarriageDriveParams(), **given.get("drive", {})))
+    omega0 = given.get("shaft", {}).get("omega0")
+    machine = MACHINE_RATE if omega0 is None else float(omega0) * 60 / (2 * math.pi)
+    designs = {"the carriage as set": {}, STIFFER: {"EJ": 2 * carriage.EJ},
+               SHORTER: {"l": carriage.l - 0.1}}
     curves = {}
-    for name, changes in DESIGNS.items():
-        model = CarriageModal(with_values(CarriageParams(), **changes))
+    for name, changes in designs.items():
+        try:
+            model = CarriageModal(with_values(carriage, **changes))
+        except ValueError as err:           # a remedy that leaves the parameters' ranges
+            curves[name] = {"parameters": changes, "error": str(err)}
+            continue
         peaks = [float(np.abs(periodic_response(model, drive, n)[1][1]).max()) for n in RATES]
+        at_machine = float(np.abs(periodic_response(model, drive, machine)[1][1]).max())
         k = int(np.argmax(peaks))
         curves[name] = {"parameters": changes, "omega1": float(model.omega[0]),
                         "omega2": float(model.omega[1]),
                         "first_resonance_stitch_rate": float(model.omega[0] * 60 / (2 * math.pi)),
                         "resonant_stitch_rate": float(RATES[k]),
-                        "peak_abs_U2_at_1600_um": peaks[RATES.index(MACHINE_RATE)] * 1e6,
+                        "peak_abs_U2_at_machine_rate_um": at_machine * 1e6,
                         "peak_abs_U2_um": [p * 1e6 for p in peaks]}
-    base = curves["paper's carriage"]
+    base = curves["the carriage as set"]
     return {"omega1": base["omega1"], "omega2": base["omega2"],
             "resonant_stitch_rate": base["resonant_stitch_rate"],
-            "peak_abs_U2_at_1600_um": base["peak_abs_U2_at_1600_um"],
+            "machine_stitch_rate": machine,
+            "peak_abs_U2_at_machine_rate_um": base["peak_abs_U2_at_machine_rate_um"],
             "stitch_rates_per_min": list(RATES), "designs": curves}
 
 
@@ -147,10 +165,13 @@ def plot_resonance(study: dict, path) -> None:
 
     fig, ax = plt.subplots(figsize=(9, 5))
     for name, curve in study["designs"].items():
+        if "error" in curve:
+            continue
         ax.plot(study["stitch_rates_per_min"], curve["peak_abs_U2_um"], "o-", ms=3,
                 label=f"{name}: ω1 = {curve['omega1']:.0f} rad/s")
-    ax.axvline(MACHINE_RATE, color="k", ls="--", lw=1)
-    ax.text(MACHINE_RATE, ax.get_ylim()[1] * 0.95, " the machine: 1600 /min", fontsize=9)
+    machine = study["machine_stitch_rate"]
+    ax.axvline(machine, color="k", ls="--", lw=1)
+    ax.text(machine, ax.get_ylim()[1] * 0.95, f" the machine: {machine:.0f} /min", fontsize=9)
     ax.set(xlabel="stitch rate [stitches/min]", ylabel="steady-state peak |U2| [µm]",
            title="Resonance of the carriage under start-stop stitches")
     ax.grid(alpha=0.3)
@@ -178,6 +199,7 @@ MECHANISM = Mechanism(
         "Carriage: steady-state peak tip deflection |U2| for 600 to 2000 stitches/min, the "
         "paper's carriage and its two remedies", resonance_study, plot_resonance,
         lambda s: {k: s[k] for k in ("omega1", "omega2", "resonant_stitch_rate",
-                                     "peak_abs_U2_at_1600_um")},
+                                     "machine_stitch_rate", "peak_abs_U2_at_machine_rate_um")},
         units={"omega1": "rad/s", "omega2": "rad/s", "resonant_stitch_rate": "1/min",
-               "peak_abs_U2_at_1600_um": "um"})})
+               "machine_stitch_rate": "1/min", "peak_abs_U2_at_machine_rate_um": "um"},
+        roles=("shaft", "drive", "carriage"))})

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import textwrap
+from typing import Mapping
 
 import numpy as np
 
@@ -119,8 +120,11 @@ def _case(params: FeedParams, **changes) -> dict:
             "phi5_deg": phi5.round(6).tolist()}
 
 
-def ratio_study() -> dict:
-    base = FeedParams()
+def ratio_study(given: Mapping[str, Mapping] | None = None) -> dict:
+    """φ5's swing for lever ratios l5/l4 and rod ratios l2/l8 about the feed mechanism as
+    `given` sets it ({"feed": {parameter: value}})."""
+    base = with_values(FeedParams(), **(given or {}).get("feed", {}))
+    design = _case(base)
     lever = []
     for ratio in L5_L4_RATIOS:
         case = _case(base, l4=base.l5 / ratio)
@@ -129,7 +133,9 @@ def ratio_study() -> dict:
     for ratio in ROD_RATIOS:
         case = _case(base, l2=base.l8 * float(ratio))
         rods.append({"l2_over_l8": float(ratio), "l2_mm": base.l8 * float(ratio) * 1e3, **case})
-    return {"phi1_deg": np.degrees(_phi1()).tolist(), "lever_ratio": lever, "rod_ratio": rods}
+    return {"phi1_deg": np.degrees(_phi1()).tolist(), "design": design,
+            "l5_over_l4": base.l5 / base.l4, "l2_over_l8": base.l2 / base.l8,
+            "lever_ratio": lever, "rod_ratio": rods}
 
 
 def plot_study(study: dict, path) -> None:
@@ -165,11 +171,18 @@ def plot_study(study: dict, path) -> None:
 
 
 def _headline(study: dict) -> dict:
-    amplitude = lambda rows, key: {str(r[key]): (round(r["phi5_amplitude_deg"], 3)
-                                                 if r["assembles"] else "cannot assemble")
-                                   for r in rows}
-    return {"phi5_amplitude_deg_by_l5_over_l4": amplitude(study["lever_ratio"], "l5_over_l4"),
-            "phi5_amplitude_deg_by_l2_over_l8": amplitude(study["rod_ratio"], "l2_over_l8")}
+    """Numbers a sweep can plot: the design's ratios and swing, and the range of each ratio
+    over which the mechanism assembles (the amplitude at each ratio is in study.json)."""
+    def assembling(rows, key, end):
+        ok = [r[key] for r in rows if r["assembles"]]
+        return end(ok) if ok else math.nan
+
+    design = study["design"]
+    return {"l5_over_l4": study["l5_over_l4"], "l2_over_l8": study["l2_over_l8"],
+            "phi5_amplitude_deg": design["phi5_amplitude_deg"] if design["assembles"]
+            else math.nan,
+            "lowest_assembling_l2_over_l8": assembling(study["rod_ratio"], "l2_over_l8", min),
+            "highest_assembling_l2_over_l8": assembling(study["rod_ratio"], "l2_over_l8", max)}
 
 
 MECHANISM = Mechanism(
@@ -179,5 +192,6 @@ MECHANISM = Mechanism(
     studies={"feed_ratio": Study(
         "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
         "branches' rod-length ratio l2/l8 from 0.7 to 1.7", ratio_study, plot_study, _headline,
-        units={"phi5_amplitude_deg_by_l5_over_l4": "deg",
-               "phi5_amplitude_deg_by_l2_over_l8": "deg"})})
+        units={"l5_over_l4": "1", "l2_over_l8": "1", "phi5_amplitude_deg": "deg",
+               "lowest_assembling_l2_over_l8": "1", "highest_assembling_l2_over_l8": "1"},
+        roles=("feed",))})

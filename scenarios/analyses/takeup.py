@@ -7,8 +7,10 @@ velocity that the FMU outputs.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import textwrap
+from typing import Mapping
 
 import numpy as np
 
@@ -164,9 +166,10 @@ def _path(params: TakeupParams):
     return e.x, e.y
 
 
-def tolerance_study() -> dict:
-    """E's path under link-length errors and under the eccentric-pin adjustment of L_CD."""
-    nominal = TakeupParams()
+def tolerance_study(given: Mapping[str, Mapping] | None = None) -> dict:
+    """E's path under link-length errors and under the eccentric-pin adjustment of L_CD, about
+    the take-up as `given` sets it ({"takeup": {parameter: value}})."""
+    nominal = with_values(TakeupParams(), **(given or {}).get("takeup", {}))
     z0, x0 = _path(nominal)
     stroke0 = path_stroke(z0, x0)
     rows = []
@@ -197,7 +200,7 @@ def tolerance_study() -> dict:
     ok = [r for r in pin if "stroke_mm" in r]
     slope = float(np.polyfit([r["change_mm"] for r in ok], [r["stroke_mm"] for r in ok], 1)[0])
     return {"nominal_stroke_mm": stroke0 * 1e3, "link_tolerance_mm": TOLERANCE * 1e3,
-            "links": rows, "pin_adjustment": pin,
+            "design": dataclasses.asdict(nominal), "links": rows, "pin_adjustment": pin,
             "stroke_change_per_mm_of_pin_adjustment": slope}
 
 
@@ -207,7 +210,7 @@ def plot_tolerance(study: dict, path) -> None:
     import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     fig, (ax_path, ax_bar, ax_pin) = plt.subplots(1, 3, figsize=(15, 4.8))
-    nominal = TakeupParams()
+    nominal = with_values(TakeupParams(), **study["design"])
     for delta in (-1e-3, 0.0, 1e-3):
         z, x = _path(with_values(nominal, L_CD=nominal.L_CD + delta))
         ax_path.plot(z * 1e3, x * 1e3, label=f"L_CD {delta * 1e3:+.0f} mm")
@@ -242,4 +245,5 @@ MECHANISM = Mechanism(
         "eccentric-pin adjustment of L_CD (±1 mm)", tolerance_study, plot_tolerance,
         lambda s: {k: s[k] for k in ("nominal_stroke_mm",
                                      "stroke_change_per_mm_of_pin_adjustment")},
-        units={"nominal_stroke_mm": "mm", "stroke_change_per_mm_of_pin_adjustment": "mm/mm"})})
+        units={"nominal_stroke_mm": "mm", "stroke_change_per_mm_of_pin_adjustment": "mm/mm"},
+        roles=("takeup",))})

@@ -139,7 +139,7 @@ def figures_of_scenario(scenario: Scenario) -> dict[str, str]:
     if not scenario.analysis:
         raise ScenarioError(f"{scenario.source}: the scenario has no analysis, so no key figures "
                             f"for a design study to read")
-    return figure_units(scenario.analysis)
+    return figure_units(scenario.analysis, scenario.study)
 
 
 def check_figure(name: str, known: Mapping[str, str], where: str) -> str:

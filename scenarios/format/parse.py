@@ -17,6 +17,7 @@ from sewfmu.scenarios.format.values import (
     label_of,
     positive,
     seconds,
+    short,
 )
 
 
@@ -32,7 +33,7 @@ def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
 
 
 # the keys of a scenario file besides the experiment's (docs/scenarios.md describes each)
-TOP_KEYS = ("description", "analysis", "roles", "connections", "record", "experiment",
+TOP_KEYS = ("description", "analysis", "study", "roles", "connections", "record", "experiment",
             "instances", "compare", "sweep")
 INSTANCE_KEYS = ("fmu", "parameters")
 COMPARE_KEYS = ("parameter", "values")
@@ -123,6 +124,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
                                 scenario.instances[inst_name].parameters[key],
                                 f"{source}: instances.{inst_name}.parameters.{key}")
     scenario.roles = _bind_roles(data, instances, source)
+    scenario.study = _study_of(data, source)
     if scenario.revolutions is not None:
         if scenario.shaft is None:
             scenario.shaft = scenario.default_shaft()
@@ -235,3 +237,23 @@ def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
                                 f"{did_you_mean(inst, instances)}")
         ends.append((inst, var))
     return Connection(ends[0][0], ends[0][1], ends[1][0], ends[1][1])
+
+
+def _study_of(data: dict, source: str) -> str | None:
+    """A study of the scenario's analysis (computed from its instances' parameters, not
+    co-simulated: scenarios/analyses), or None."""
+    from sewfmu.scenarios.analyses import mechanism  # loaded on first use (start-up time)
+
+    study = data.get("study")
+    if study is None:
+        return None
+    analysis = data.get("analysis")
+    known = list(mechanism(analysis).studies) if isinstance(analysis, str) else []
+    if not isinstance(study, str) or study not in known:
+        raise ScenarioError(f"{source}: study must name a study of the analysis "
+                            f"{analysis!r}, got {short(study)}{did_you_mean(str(study), known)} "
+                            f"(known: {', '.join(known) or 'none'})")
+    if data.get("compare"):
+        raise ScenarioError(f"{source}: a study compares its designs itself: [compare] has no "
+                            f"use in it (a [sweep] has)")
+    return study

@@ -62,6 +62,8 @@ class Scenario:
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/format/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
+    # a study of its analysis: computed from its instances' parameters, not co-simulated
+    study: str | None = None
 
     def settings(self):
         """The typed settings of its master (scenarios/format/master_settings.py): the file's

@@ -235,7 +235,7 @@ def sweep_report(path: Path, scenario, rows: list[dict], swept: list[str],
     table = Section("Points")
     columns = ["index", *swept, "status"]
     columns += [k for k in rows[0] if k not in columns and k not in ("key", "error")]
-    units = {"stop_time": "s", "wall_time_s": "s", **analyses.figure_units(scenario.analysis)}
+    units = {"stop_time": "s", "wall_time_s": "s", **analyses.figure_units(scenario.analysis, scenario.study)}
     table.table([f"{c} [{units[c]}]" if units.get(c) and c not in swept else c
                  for c in columns] + ["error"],
                 [[r.get(c) for c in columns] + [r.get("error", "")] for r in rows],

@@ -1,6 +1,6 @@
 """A run's files (and a study's): results.csv (a column per recorded output, its unit in the header),
 summary.json, and as asked the plots, animations and report.html, written into the output folder
-in one piece (files.outputs.replacing); run_scenario and run_study run and write."""
+in one piece (files.outputs.replacing); run_scenario runs and writes (a study: runs/studies.py)."""
 from __future__ import annotations
 
 import json
@@ -91,20 +91,3 @@ def run_scenario(scenario: Scenario, out_dir: Path, plot: bool = False,
     runs = run_variants(scenario, fmu_dir, progress)
     write_outputs(scenario, runs, out_dir, plot=plot, animate=animate, report=report)
     return summary_of_runs(scenario, runs)
-
-
-def run_study(name: str, out_dir: Path, plot: bool = False, report: bool = False) -> dict:
-    """Run a study into out_dir: study.json (everything), summary.json (the headline figures)
-    and, with plot, NAME.png; with report, report.html; return the headline figures."""
-    _, study = analyses.studies()[name]
-    data = study.compute()
-    headline = study.headline(data)
-    with replacing(out_dir) as staging:
-        write_json(data, staging / "study.json")
-        write_json(headline, staging / "summary.json")
-        if plot or report:
-            study.plot(data, staging / f"{name}.png")
-        if report:
-            from sewfmu.scenarios.runs.report import study_report  # only with --report
-            study_report(staging / "report.html", name, study, headline, staging / f"{name}.png")
-    return headline

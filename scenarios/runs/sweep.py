@@ -61,6 +61,7 @@ def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
                       for n, i in scenario.instances.items()},
         "connections": [str(c) for c in scenario.connections],
         "record": scenario.record, "analysis": scenario.analysis, "roles": scenario.roles,
+        "study": scenario.study,
         "experiment": experiment_of(scenario),
         "fmus": {fmu: fmu_version(Path(path)) for fmu, path in sorted(fmu_paths.items())},
     }
@@ -140,12 +141,16 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
     from sewfmu.scenarios.analyses import figures_of  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_csv  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.runner import simulate, summarize  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.studies import study_summary  # loaded on first use (start-up time)
 
     row = {"index": point.index, "key": key, **dict(point.values)}
     try:
         sc = scenario.copy()
         for target, value in point.values:
             sc.set_value(target, value)
+        if sc.study:                             # computed, not co-simulated
+            figures = study_summary(sc)[1]
+            return {**row, "status": "ok", **figures_of(figures)}
         result = simulate(sc)
         figures = summarize(result)
         if results_dir:
@@ -364,6 +369,9 @@ def sweep_title(scenario: Scenario, rows: list[dict], swept: list[str]) -> str:
     else:
         length = f"stop time {scenario.stop_time:g} s"
     failed = sum(1 for r in rows if r["status"] != "ok")
+    if scenario.study:                     # computed at each point, not co-simulated
+        return (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
+                f"{f' ({failed} failed)' if failed else ''}; the study computed at each")
     return (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
             f"{f' ({failed} failed)' if failed else ''}; each {length}, step "
             f"{scenario.step * 1e3:g} ms, {scenario.master} master")
@@ -407,8 +415,11 @@ def sweep_figure(rows: list[dict], swept: list[str], figures: dict[str, str],
             if not numeric:
                 ax.set_xticks(range(len(values)), [str(v) for v in values])
             axis = f"{param} [{units[param]}]" if units.get(param) else param
+            # a long figure name on lines of its own, so that it stays inside the picture
+            ylabel = "\n".join(textwrap.wrap(figure.replace("_", " "), 24)) if len(figure) > 24 \
+                else figure
             ax.set(xlabel=axis if i == len(figures) - 1 else "",
-                   ylabel=f"{figure} [{unit}]" if unit else figure)
+                   ylabel=f"{ylabel} [{unit}]" if unit else ylabel)
             ax.grid(alpha=0.3)
         if axes[0][j].get_legend_handles_labels()[0]:      # one swept parameter: no legend
             axes[0][j].legend(fontsize=6, ncol=1, loc="best")
@@ -435,7 +446,8 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
 
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
-        figures = {f: unit for f, unit in analyses.mechanism(scenario.analysis).figures.items()
+        figures = {f: unit for f, unit in analyses.figure_units(scenario.analysis,
+                                                                  scenario.study).items()
                    if f != "n_contacts"}
         plot_table(rows, swept, figures, picture, sweep_title(scenario, rows, swept),
                    {param: declared_unit(scenario, param) for param in swept})
