@@ -98,3 +98,11 @@ def test_a_study_is_swept_like_a_scenario(tmp_path):
     stroke = sweep.table["nominal_stroke_mm"]
     assert stroke[0] < stroke[1] and sweep.units["nominal_stroke_mm"] == "mm"
     assert (tmp_path / "takeup_tolerance_sweep.png").stat().st_size > 1000
+
+
+def test_every_study_of_every_analysis_has_its_catalogue_scenario():
+    from sewfmu.scenarios.analyses import studies
+
+    for name, (analysis, _) in studies().items():
+        scenario = sewfmu.load(name)
+        assert (scenario.study, scenario.analysis) == (name, analysis)
