@@ -13,7 +13,8 @@ from sewfmu._version import __version__
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "parameters",
            "scenarios",
-           "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
+           "Run", "Sweep", "Scenario", "Instance", "Connection", "Error", "ScenarioError",
+           "CosimError", "OutputError",
            "Diverged", "MissingExtra", "optimize", "fit", "sensitivity"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
@@ -22,6 +23,9 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
                                             "parameters", "Run", "Sweep", "Scenario", "ScenarioError",
                                             "InaccurateRun")},
          "Error": "sewfmu.errors",
+         # to build a scenario in Python (docs/scenarios.md)
+         "Instance": "sewfmu.scenarios.format.scenario",
+         "Connection": "sewfmu.scenarios.format.scenario",
          "MissingExtra": "sewfmu.extras",
          "OutputError": "sewfmu.scenarios.files.outputs",
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",

@@ -41,6 +41,10 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
     given is copied, never changed."""
     if isinstance(scenario, Scenario):
         loaded = scenario.copy()
+        for inst in loaded.instances.values():       # a value with a unit, a numpy number:
+            for key, value in list(inst.parameters.items()):     # as --set would take it
+                if not isinstance(value, (bool, int, float)):
+                    loaded.set_value(f"{inst.name}.{key}", value, origin="Instance")
     elif isinstance(scenario, (str, Path)):
         loaded = _load_scenario(str(scenario))
     else:
@@ -447,6 +451,7 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
     from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
+    out = _folder(out, "out")
     sc, paths, described = _design_scenario(scenario, set)
     known = space.figures_of_scenario(sc)
     goal = space.goal_of(known, minimize, maximize, target)
@@ -468,6 +473,7 @@ def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
     from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
+    out = _folder(out, "out")
     sc, paths, described = _design_scenario(scenario, set)
     measured = design.read_data(data)
     ends = {"experiment.stop_time", "experiment.revolutions"}
@@ -486,6 +492,7 @@ def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figure
     from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
+    out = _folder(out, "out")
     sc, _, described = _design_scenario(scenario, set)
     named = space.figures_named(space.figures_of_scenario(sc), figures)
     variables = space.variables(sc, vary, described)

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from sewfmu.extras import EXTRAS, install_command  # noqa: F401  (install_command: the app's and the CLI's)
+from sewfmu.scenarios.files.outputs import written_by_last_run
 from sewfmu.scenarios.format.values import label_of
 
 
@@ -43,10 +44,9 @@ def print_run(name: str, run, out: Path) -> None:
             print(f"    (± : the estimated coupling error, {how})")
         if done:
             print("    " + ", ".join(f"{k} = {fmt(v)}" for k, v in done.items()))
-    if out.is_dir():
-        written = sorted(str(p.relative_to(out)) for p in out.rglob("*")
-                         if p.is_file() and not p.name.startswith("."))
-        print(f"  files: {', '.join(written)}")
+    written = written_by_last_run(out)        # what this run wrote, not the user's own files
+    if written:
+        print(f"  files: {', '.join(sorted(written))}")
 
 
 def print_sweep(name: str, rows: list[dict], out: Path) -> None:

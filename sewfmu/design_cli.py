@@ -3,6 +3,7 @@ Their options and what they print, each calling the API's function of its verb (
 sewfmu/cli.py's main adds them to its commands (a module of their own: cli.py's size)."""
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -47,6 +48,10 @@ def _warn(message: str) -> None:
 def cmd_optimize(args) -> None:
     out = Path(args.out) if args.out else Path("results") / f"{Path(args.scenario).stem}_optimize"
     target = dict(item.partition("=")[::2] for item in args.target) if args.target else None
+    if target and len(target) < len(args.target):     # the second would replace the first
+        names = [item.partition("=")[0].strip() for item in args.target]
+        twice = next(n for n in names if names.count(n) > 1)
+        raise ScenarioError(f"--target {twice}: given twice (one target per figure)")
     if target and any(not v.strip() for v in target.values()):
         raise ScenarioError(f"--target {' '.join(args.target)}: expected FIGURE=VALUE with an "
                             f"optional unit, like \"F2_weld_mean=25 N\"")
@@ -85,7 +90,10 @@ def cmd_fit(args) -> None:
                 out=out, max_evaluations=args.max_evaluations, progress=not args.quiet)
     if not f.converged:
         _warn(f"least_squares did not converge ({f.message})")
-    print(f"{f.scenario}: fit to {args.data} in {f.evaluations} runs; results in {out}/")
+    for note in f.summary.get("warnings", []):
+        _warn(note)
+    print(f"{f.scenario}: fit to {args.data} in {f.evaluations} runs "
+          f"({f.summary['computed']} made now); results in {out}/")
     for name, value in f.estimates.items():
         unit = f.units.get(name, "")
         print(f"  {name} = {_quantity(value, unit)} ± {_quantity(f.standard_errors[name], unit)}")
@@ -111,6 +119,17 @@ def cmd_sensitivity(args) -> None:
                               if entry.get(k + "_conf") is not None else
                               f"{k} = {_index(entry[k])}" for k in shown)
             print(f"    {name}: {cells}")
+
+
+def _at_least_two(text: str) -> int:
+    """--samples: the API's own check (a whole number >= 2), said the same way for 0 and 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
+    return value
 
 
 def _index(value) -> str:
@@ -154,7 +173,8 @@ def add_commands(sub) -> None:
                    help="a parameter to fit and its range; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--max-evaluations", type=whole_number, metavar="N",
-                   help="least_squares' max_nfev (default 100)")
+                   help="least_squares' max_nfev (default 100): evaluations of the residuals, "
+                        "besides the n runs of each finite-difference Jacobian")
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/); "
                                                 "a fit run again into it resumes")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -167,7 +187,7 @@ def add_commands(sub) -> None:
                    help="a key figure to analyze; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
-    p.add_argument("--samples", type=whole_number, metavar="N",
+    p.add_argument("--samples", type=_at_least_two, metavar="N",
                    help="Sobol: base samples N, a power of 2 "
                                                   "(N·(D+2) runs; default 64); Morris: "
                                                   "trajectories (N·(D+1) runs; default 16)")

@@ -3,6 +3,7 @@ sewfmu's: checked against its modelDescription when the file is read, its connec
 through the FMI unit definitions or refused, and its results the ones fmpy's own simulate_fmu
 and a hand computation give. The FMUs are made here, not by sewfmu (tests/foreign_fmus.py)."""
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,3 +174,54 @@ def test_a_foreign_fmu_is_checked_and_refused_in_one_line(tmp_path, gain_fmu, ch
     with pytest.raises(sewfmu.ScenarioError) as err:
         sewfmu.run(tmp_path / "bad.toml")
     assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def _with_capabilities(fmu: Path, folder: Path, **capabilities) -> Path:
+    """A copy of an FMU whose modelDescription declares other co-simulation capabilities."""
+    import re
+    import zipfile
+
+    out = folder / fmu.name
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                for name, value in capabilities.items():
+                    text = re.sub(rf'{name}="\w+"', f'{name}="{value}"', text)
+                data = text.encode()
+            dst.writestr(item, data)
+    return out
+
+
+@pytest.mark.parametrize("master, capability, said", [
+    ("adaptive", "canGetAndSetFMUstate", "cannot save and restore its state"),
+    ("adaptive", "canHandleVariableCommunicationStepSize", "takes only steps of one size"),
+])
+def test_an_fmu_is_not_asked_for_what_it_declares_it_cannot_do(tmp_path, gain_fmu, master,
+                                                                capability, said):
+    _with_capabilities(gain_fmu, tmp_path, **{capability: "false"})
+    (tmp_path / "s.toml").write_text(GAIN_SCENARIO.format(**WITH_GAIN))
+    with pytest.raises(sewfmu.CosimError) as err:
+        sewfmu.run(tmp_path / "s.toml", set={"experiment.master": master})
+    assert said in str(err.value) and "gain (Gain)" in str(err.value)
+    assert "jacobi" in str(err.value) and "\n" not in str(err.value)
+    # the fixed-step masters never roll back: the same FMU runs with them
+    r = sewfmu.run(tmp_path / "s.toml", set={"experiment.master": "jacobi"})
+    assert r.series["punch.F2"].max() > 5.0
+
+
+def test_a_value_given_to_a_connected_input_is_refused_not_ignored(tmp_path):
+    with pytest.raises(sewfmu.ScenarioError, match="punch.xi is an input fed by the connection "
+                                                   "linkage.xi -> punch.xi"):
+        sewfmu.run("punch_drive", set={"punch.xi": 0.01, "experiment.revolutions": 1})
+
+
+def test_an_instance_built_in_python_takes_values_with_units():
+    sc = sewfmu.load("punch_drive", set={"experiment.revolutions": 1})
+    sc.instances["shaft"] = sewfmu.Instance("shaft", "MainShaft", {"omega0": "1910 rpm"})
+    assert sewfmu.load(sc).instances["shaft"].parameters["omega0"] == pytest.approx(
+        1910 * 2 * np.pi / 60, rel=1e-12)
+    sc.instances["shaft"] = sewfmu.Instance("shaft", "MainShaft", {"omega0": "3 kg"})
+    with pytest.raises(sewfmu.ScenarioError, match="kg is a mass"):
+        sewfmu.load(sc)

@@ -39,7 +39,8 @@ def test_a_fit_run_again_resumes_from_its_record(tmp_path):
     again = sewfmu.fit("punch_drive", data=tmp_path / "trace.csv", free={"punch.b2": "20..300"},
                        out=out)
     # nothing run again but the optimum's series, drawn for the plot
-    assert again.evaluations == 1 and again.summary["reused_evaluations"] >= first.evaluations
+    assert again.summary["computed"] == 1 and again.summary["reused_evaluations"] >= \
+        first.evaluations and again.evaluations == 1 + again.summary["reused_evaluations"]
     assert again.estimates == first.estimates                 # the same path, bit for bit
     assert again.standard_errors == first.standard_errors
     # killed after three runs, its last line torn: the rest runs, the answer is the same
@@ -47,7 +48,7 @@ def test_a_fit_run_again_resumes_from_its_record(tmp_path):
     resumed = sewfmu.fit("punch_drive", data=tmp_path / "trace.csv",
                          free={"punch.b2": "20..300"}, out=out)
     assert resumed.estimates == first.estimates
-    assert resumed.evaluations == first.evaluations - 3       # the optimum among those run
+    assert resumed.summary["computed"] == first.evaluations - 3   # the optimum among them
 
 
 def test_a_fit_to_other_data_sets_the_old_record_aside(tmp_path):
@@ -209,3 +210,73 @@ def test_optimize_and_fit_show_their_runs_on_a_terminal(monkeypatch, tmp_path):
     sewfmu.fit("punch_drive", data=_trace_file(tmp_path), free={"punch.b2": "20..300"},
                max_evaluations=2, progress=True)
     assert "fit punch_drive" in terminal.text and "run" in terminal.text
+
+
+def test_data_that_carry_nothing_of_a_parameter_give_no_standard_error(tmp_path):
+    r = sewfmu.run("punch_drive", set=SHORT)
+    zero = {"time": r.series["time"], "punch.F2": np.zeros(len(r.series))}
+    fit = sewfmu.fit("punch_drive", data=zero, free={"punch.c2": "2e4..1.5e5 N/m"})
+    # the fit runs to the stiffness's lower bound: said, and never an error of exactly 0
+    assert fit.standard_errors["punch.c2"] > 0
+    assert any("ends at its lower bound 20000 N/m" in w for w in fit.summary["warnings"])
+
+
+def test_a_parameter_the_residuals_do_not_change_with_has_an_infinite_error():
+    from sewfmu.scenarios.design.fit import _identifiability
+    from sewfmu.scenarios.design.space import Variable
+
+    free = [Variable("a.x", 0.0, 1.0, "m", 0.5), Variable("a.y", 0.0, 1.0, "m", 0.5)]
+    flat = _identifiability(np.array([[1.0, 0.0], [2.0, 0.0]]), free, np.array([0.5, 0.5]))
+    assert flat["undetermined"] and "a.y" in flat["warnings"][0]
+    together = _identifiability(np.array([[1.0, 2.0], [2.0, 4.0]]), free, np.array([0.5, 0.5]))
+    assert together["undetermined"] and "only together" in together["warnings"][0]
+    fine = _identifiability(np.array([[1.0, 0.0], [0.0, 1.0]]), free, np.array([0.5, 0.0]))
+    assert not fine["undetermined"] and "a.y ends at its lower bound 0 m" in fine["warnings"][0]
+
+
+@pytest.mark.parametrize("data, said", [
+    ({"time": [0.0, 0.01, 0.02], "punch.F2": [0.0, 1.0]}, "differ in length"),
+    ({"time": [0.0, 0.01], "punch.F2": [[0.0, 1.0], [1.0, 2.0]]}, "one row of numbers"),
+    ({"time": [0.0, 0.01], "punch.F2": [0.0, np.inf]}, "infinite value"),
+    ({"time": [0.0, 0.01], "punch.F2": [0.0, 1e308]}, "beyond any measurement"),
+    ({"time": 0.0, "punch.F2": 1.0}, "one row of numbers, got shape ()"),
+    ("no_such_file.csv", "no such file"),
+])
+def test_a_table_is_checked_as_a_file_is(data, said):
+    with pytest.raises(sewfmu.ScenarioError) as err:
+        sewfmu.fit("punch_drive", data=data, free={"punch.c2": "2e4..1.5e5 N/m"})
+    assert said in str(err.value) and "\n" not in str(err.value)
+
+
+def test_numpy_goals_and_a_single_constraint_text():
+    found = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
+                            target={"F2_weld_mean": np.float32(25)}, set=SHORT,
+                            max_evaluations=np.int64(2))
+    assert found.summary["target"] == {"F2_weld_mean": 25.0}
+    found = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"}, minimize="F2_peak",
+                            constraints="F2_weld_mean>=20 N", set=SHORT, max_evaluations=2)
+    assert found.summary["constraints"] == ["F2_weld_mean>=20 N"] or \
+        len(found.summary["constraints"]) == 1
+
+
+def test_a_target_given_twice_is_refused(capsys):
+    from sewfmu.cli import main
+
+    assert main(["optimize", "punch_drive", "--vary", "punch.F10=15..40 N", "--target",
+                 "F2_weld_mean=25 N", "--target", "F2_weld_mean=24 N"]) == 1
+    assert "--target F2_weld_mean: given twice" in capsys.readouterr().err
+
+
+def test_a_torn_last_line_is_cut_off_before_the_record_goes_on(tmp_path):
+    out = tmp_path / "s"
+    first = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
+                            target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
+    lines = (out / "evaluations.csv").read_text().splitlines(keepends=True)
+    (out / "evaluations.csv").write_text("".join(lines[:3]) + lines[3][:25])
+    again = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
+                            target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
+    assert again.best == first.best
+    with open(out / "evaluations.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(first.evaluations) and all(r["status"] == "ok" for r in rows)
+    assert [int(r["index"]) for r in rows] == list(range(len(rows)))

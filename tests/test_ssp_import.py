@@ -32,6 +32,8 @@ def _runs_of_catalogue():
     out = []
     for name in sorted(catalogue()):
         sc = load(name)
+        if sc.study:                 # computed, not co-simulated: the same system is there
+            continue
         if sc.compare:
             sc.set_value(sc.compare["parameter"], sc.compare["values"][0])
             sc.compare = None

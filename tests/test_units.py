@@ -64,6 +64,14 @@ def test_a_unit_of_the_wrong_dimension_is_refused_in_one_line(target, text, said
     assert said in str(err.value) and "\n" not in str(err.value)
 
 
+@pytest.mark.parametrize("text", ["300 s⁻¹", "300 1/s", "300 s^-1"])
+def test_per_second_for_a_rotational_speed_is_ambiguous_and_refused(text):
+    # the papers' ω in s⁻¹ is rad/s; pint's turns per second would be 2π times more
+    with pytest.raises(ScenarioError, match=r"ambiguous for a rotational speed.*rad/s.*rev/s"):
+        load("punch_drive").set_value("shaft.omega0", text)
+    assert in_declared_unit("5 Hz", "rad/s") == pytest.approx(10 * 3.141592653589793)
+
+
 def test_an_unknown_unit_and_a_missing_number_are_refused():
     with pytest.raises(UnitError, match="'furlongs/fortnight' is not a unit|is a velocity"):
         in_declared_unit("3 furlongs/fortnight", "N")

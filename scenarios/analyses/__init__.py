@@ -23,6 +23,7 @@ from typing import Callable
 
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.errors import Error
+from sewfmu.scenarios.format.values import ScenarioError
 
 
 @dataclass(frozen=True)
@@ -161,8 +162,9 @@ def module(analysis: str) -> ModuleType:
     return importlib.import_module(f"{__name__}.{analysis}")
 
 
-class MissingRecord(Error, KeyError):
-    """A figure or a picture needs a column the run did not record."""
+class MissingRecord(ScenarioError, KeyError):
+    """A figure or a picture needs a column the run did not record (a ScenarioError: the
+    scenario's `record` left it out)."""
 
     def __str__(self) -> str:
         return self.args[0]

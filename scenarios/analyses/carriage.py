@@ -151,6 +151,8 @@ def resonance_study(given: Mapping[str, Mapping] | None = None) -> dict:
                         "peak_abs_U2_at_machine_rate_um": at_machine * 1e6,
                         "peak_abs_U2_um": [p * 1e6 for p in peaks]}
     base = curves["the carriage as set"]
+    if "error" in base:                     # the design itself: nothing to compare it with
+        raise ValueError(base["error"])
     return {"omega1": base["omega1"], "omega2": base["omega2"],
             "resonant_stitch_rate": base["resonant_stitch_rate"],
             "machine_stitch_rate": machine,

@@ -125,6 +125,8 @@ def ratio_study(given: Mapping[str, Mapping] | None = None) -> dict:
     `given` sets it ({"feed": {parameter: value}})."""
     base = with_values(FeedParams(), **(given or {}).get("feed", {}))
     design = _case(base)
+    if not design["assembles"]:             # the design itself: its ratios mean nothing
+        raise AssemblyError(design["error"])
     lever = []
     for ratio in L5_L4_RATIOS:
         case = _case(base, l4=base.l5 / ratio)

@@ -8,7 +8,7 @@ algorithm that never rolls back steps with true, which lets an FMU drop its hist
 """
 from __future__ import annotations
 
-from sewfmu.scenarios.cosim.fmi_calls import FmiCallError
+from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError
 
 
 class Rollback:
@@ -16,6 +16,13 @@ class Rollback:
 
     def __init__(self, instances):
         self.instances = list(instances)
+        unable = [i for i in self.instances
+                  if not getattr(i.md.coSimulation, "canGetAndSetFMUstate", False)]
+        if unable:                  # before any step: a refusal, not a failure at t = 0
+            names = ", ".join(f"{i.name} ({i.md.modelName})" for i in unable)
+            raise CosimError(f"{names} cannot save and restore its state (its modelDescription "
+                             f"says canGetAndSetFMUstate = false), which taking a step again "
+                             f"needs: run it with the jacobi or gauss-seidel master")
         self.slots = [inst.new_state_slot() for inst in self.instances]
         self.inputs: list[list[float]] = []
 

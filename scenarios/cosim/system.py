@@ -95,11 +95,19 @@ def check_parameters(scenario: Scenario, descriptions: dict) -> None:
     """Every parameter the scenario sets exists in its FMU and fits its type and declared range:
     checked from the modelDescriptions alone (instance name -> description), before any FMU
     runs (a sweep checks every point so)."""
+    fed = {(c.dst, c.dst_var): c for c in scenario.connections}
     for inst in scenario.instances.values():
         md = descriptions[inst.name]
         variables = {v.name: v for v in md.modelVariables}
         for key, value in inst.parameters.items():
             v = variables.get(key)
+            source = fed.get((inst.name, key))
+            if source is not None and v is not None and v.causality == "input" \
+                    and not _from_ssp(scenario):
+                # the connection sets it at every step: the value would be ignored
+                raise ScenarioError(f"{scenario.source}: {inst.name}.{key} is an input fed by "
+                                    f"the connection {source}: a value given to it would be "
+                                    f"ignored; remove the connection to hold it at a value")
             # an input may be given a value too: it then holds it (unconnected)
             if v is None or v.causality not in ("parameter", "input"):
                 names = sorted(n for n, x in variables.items() if x.causality == "parameter")

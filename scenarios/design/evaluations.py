@@ -37,7 +37,7 @@ import numpy as np
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
-from sewfmu.scenarios.files.outputs import held, set_aside
+from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
@@ -255,6 +255,7 @@ class EvaluationLog:
         self._folder.enter_context(held(path.parent))
         try:
             if path.exists():
+                drop_torn_line(path)
                 self._read()
             fresh = not path.exists() or path.stat().st_size == 0
             self.file = open(path, "a", newline="", encoding="utf-8")
@@ -263,8 +264,6 @@ class EvaluationLog:
             raise
         if fresh:
             self._write(self.columns)
-        else:
-            self._fresh_line()
 
     def _read(self) -> None:
         with open(self.path, newline="", encoding="utf-8", errors="replace") as f:
@@ -301,15 +300,6 @@ class EvaluationLog:
             return None
         return Evaluation(values, row["status"], figures, row["error"], row["key"], index,
                           reused=True)
-
-    def _fresh_line(self) -> None:
-        """After a line torn by a kill, the next one starts on its own line."""
-        with open(self.path, "rb") as f:
-            f.seek(0, os.SEEK_END)
-            if f.tell():
-                f.seek(-1, os.SEEK_END)
-                if f.read(1) != b"\n":
-                    self.file.write("\r\n")
 
     def _write(self, cells: list) -> None:
         buffer = io.StringIO()

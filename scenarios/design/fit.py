@@ -40,6 +40,7 @@ SETTINGS = {"method": "trf", "diff_step": 1e-3, "xtol": 1e-8, "ftol": 1e-10, "gt
 DEFAULT_EVALUATIONS = 100
 # the residuals of a point that fails: far worse than any fit, finite (least_squares needs it)
 FAILED_RESIDUAL = 1e3
+BEYOND_MEASUREMENT = 1e150      # a value whose square overflows a float is no measurement
 _HEADER_UNIT = re.compile(r"^\s*(.*?)\s*\[(.*)\]\s*$")
 
 
@@ -78,15 +79,34 @@ class Fit:
 def read_data(data: Any) -> Data:
     """A CSV file (path) or a numpy structured array / dict of arrays with a `time` field."""
     if isinstance(data, (str, Path)):
+        if not Path(data).is_file():
+            raise ScenarioError(f"data: {data}: no such file (a CSV file with a time column)")
         return _read_csv(Path(data))
     names = getattr(getattr(data, "dtype", None), "names", None)
     if names is not None:
-        table = {n: np.asarray(data[n], dtype=float) for n in names}
+        columns = {n: data[n] for n in names}
     elif isinstance(data, Mapping):
-        table = {str(k): np.asarray(v, dtype=float) for k, v in data.items()}
+        columns = {str(k): v for k, v in data.items()}
     else:
         raise ScenarioError(f"data: a CSV file or a table of columns (numpy structured array or "
                             f"dict), got {type(data).__name__}")
+    table = {}
+    for name, values in columns.items():        # what a CSV file's reading checks, for a table
+        try:
+            column = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise ScenarioError(f"data: column {name!r} is not numbers") from None
+        if column.ndim != 1:
+            raise ScenarioError(f"data: column {name!r} must be one row of numbers, got shape "
+                                f"{column.shape}")
+        if np.any(np.isinf(column)):
+            raise ScenarioError(f"data: column {name!r} holds an infinite value, which is not a "
+                                f"measurement (NaN marks a missing one)")
+        table[name] = column
+    lengths = {len(c) for c in table.values()}
+    if len(lengths) > 1:
+        raise ScenarioError(f"data: the columns differ in length ("
+                            f"{', '.join(f'{n}: {len(c)}' for n, c in table.items())})")
     return _checked("data", table, {})
 
 
@@ -135,6 +155,11 @@ def _checked(source: str, table: dict, units: dict) -> Data:
         raise ScenarioError(f"{source}: no column besides time to fit to")
     if len(t) < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise ScenarioError(f"{source}: the times must be finite and increasing (at least two)")
+    for name, values in table.items():
+        largest = float(np.nanmax(np.abs(values))) if np.any(np.isfinite(values)) else 0.0
+        if largest > BEYOND_MEASUREMENT:
+            raise ScenarioError(f"{source}: column {name} holds {largest:g}, beyond any "
+                                f"measurement (its squares would overflow)")
     return Data(source, t, table, {k: u for k, u in units.items() if k != "time"})
 
 
@@ -276,6 +301,9 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
     ranges = np.array([v.hi - v.lo for v in free])
     cov = cov_u * np.outer(ranges, ranges)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    notes = _identifiability(r.jac, free, r.x)
+    if notes["undetermined"]:              # pinv's 0 there would claim an exact answer
+        se[:] = math.inf
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se)
     x_best = model.x(r.x)
@@ -295,11 +323,15 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
         "columns": list(data.columns), "samples": int(m),
         "free": {v.name: {"low": v.lo, "high": v.hi, "start": v.start, "unit": v.unit}
                  for v in free},
-        "estimates": estimates, "standard_errors": dict(zip(names, se.tolist())),
+        "estimates": estimates,
+        "standard_errors": {k: _finite(v) for k, v in zip(names, se.tolist())},
+        "warnings": notes["warnings"],
         "units": units, "residual_rms": rms,
         "correlation": {a: {b: _finite(corr[i, j]) for j, b in enumerate(names)}
                         for i, a in enumerate(names)},
-        "converged": bool(r.success), "message": str(r.message), "evaluations": model.runs,
+        "converged": bool(r.success), "message": str(r.message),
+        # this fit's runs, those made now, and those its record held (a resumed fit)
+        "evaluations": model.runs + model.reused, "computed": model.runs,
         "reused_evaluations": model.reused,
         "failed_evaluations": [{"point": dict(zip(names, x)), "error": e}
                                for x, e in model.failures],
@@ -314,8 +346,33 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
 
             fit_plot(out / "fit.png", scenario.name, data.time, data.columns, t_run, series,
                      units)
-    return Fit(scenario.name, estimates, summary["standard_errors"], summary["correlation"],
-               residuals, rms, units, bool(r.success), str(r.message), model.runs, out, summary)
+    return Fit(scenario.name, estimates, dict(zip(names, se.tolist())), summary["correlation"],
+               residuals, rms, units, bool(r.success), str(r.message), model.runs + model.reused,
+               out, summary)
+
+
+def _identifiability(jac: np.ndarray, free: list[Variable], u: np.ndarray) -> dict:
+    """What the data leave open: parameters the residuals do not change with (or only together:
+    a Jacobian of lower rank), whose standard errors are then infinite; estimates at a bound of
+    their range, where the best fit may lie beyond it."""
+    warnings = []
+    norms = np.linalg.norm(jac, axis=0)
+    flat = [v.name for v, norm in zip(free, norms) if norm <= 1e-12 * max(norms.max(), 1e-300)]
+    undetermined = bool(flat) or np.linalg.matrix_rank(jac) < len(free)
+    if flat:
+        warnings.append(f"the data do not depend on {', '.join(flat)} near the fit: "
+                        f"{'it is' if len(flat) == 1 else 'they are'} not determined (standard "
+                        f"error infinite)")
+    elif undetermined:
+        warnings.append("the data determine the free parameters only together (their effects "
+                        "on the residuals are proportional): standard errors infinite")
+    for v, ui in zip(free, u):
+        if min(ui, 1.0 - ui) <= 1e-6:
+            bound = v.lo if ui < 0.5 else v.hi
+            warnings.append(f"{v.name} ends at its {'lower' if ui < 0.5 else 'upper'} bound "
+                            f"{bound:g} {v.unit}".rstrip() + ": the best fit may lie beyond the "
+                            "range")
+    return {"undetermined": undetermined, "warnings": warnings}
 
 
 def _finite(value: float) -> float | None:

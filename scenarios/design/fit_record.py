@@ -13,13 +13,12 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.files.outputs import held, set_aside
+from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
 from sewfmu.scenarios.runs.sweep import Point, settings_of
 
 RECORD_FILE = "fit_evaluations.jsonl"
@@ -40,13 +39,13 @@ class FitRecord:
         self._folder = contextlib.ExitStack()      # the folder is this fit's while it runs
         self._folder.enter_context(held(self.path.parent))
         try:
+            if self.path.exists():
+                drop_torn_line(self.path)              # a line torn by a kill
             self._read()
             fresh = not self.path.exists() or self.path.stat().st_size == 0
             self.file = open(self.path, "a", encoding="utf-8")
             if fresh:
                 self._write(self.header)
-            elif not _ends_with_newline(self.path):     # a line torn by a kill
-                self.file.write("\n")
         except BaseException:
             self._folder.close()
             raise
@@ -98,12 +97,3 @@ def _json(line: str):
         return json.loads(line)
     except ValueError:
         return None
-
-
-def _ends_with_newline(path: Path) -> bool:
-    with open(path, "rb") as f:
-        f.seek(0, os.SEEK_END)
-        if not f.tell():
-            return True
-        f.seek(-1, os.SEEK_END)
-        return f.read(1) == b"\n"

@@ -27,7 +27,7 @@ from sewfmu.extras import require
 from sewfmu.scenarios.design.space import Variable
 from sewfmu.scenarios.files.outputs import write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError, plain
 from sewfmu.scenarios.runs.sweep import Point, run_sweep
 
 METHODS = ("sobol", "morris")
@@ -88,7 +88,7 @@ def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str
     bar chart per figure (sensitivity_FIGURE.png)."""
     if method not in METHODS:
         raise ScenarioError(f"--method: one of {', '.join(METHODS)}, got {method!r}")
-    samples = DEFAULT_SAMPLES[method] if samples is None else samples
+    samples = DEFAULT_SAMPLES[method] if samples is None else plain(samples)
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
         raise ScenarioError(f"--samples: a whole number >= 2, got {samples!r}")
     if method == "sobol" and samples & (samples - 1):       # Saltelli's scheme needs it

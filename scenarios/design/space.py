@@ -22,7 +22,7 @@ from sewfmu.scenarios.cosim.divergence import declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.format.quantities import in_declared_unit
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError, short
+from sewfmu.scenarios.format.values import ScenarioError, plain, short
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 # "LO..HI unit", "LO unit..HI unit": the first ".." that is not inside a number splits it
@@ -161,6 +161,7 @@ def figure_value(value: Any, unit: str, where: str, figure: str) -> float:
     """A figure's value given as a number (in the figure's unit) or a string with any unit of
     its kind ("25 N", "2.5 kgf", "1.9 rad" for a figure in degrees), converted as --set values
     are (format/quantities.py)."""
+    value = plain(value)                  # np.float32(25), np.array(25.0): the number
     if isinstance(value, str):
         try:
             value = in_declared_unit(value, unit, figure)
@@ -263,6 +264,8 @@ class Constraint:
 def constraints_of(known: Mapping[str, str], given: Sequence | None) -> list[Constraint]:
     """Constraints from "FIGURE>=VALUE unit" texts or (figure, op, value) tuples."""
     out = []
+    if isinstance(given, (str, tuple)):       # one constraint, not a list of its characters
+        given = [given]
     for item in given or []:
         if isinstance(item, str):
             match = _CONSTRAINT.match(item)
@@ -287,8 +290,7 @@ def evaluation_budget(max_evaluations: Any, default: int) -> int:
     command line's --max-evaluations takes the same), never 0 read as "the default"."""
     if max_evaluations is None:
         return default
-    if isinstance(max_evaluations, (np.integer,)):
-        max_evaluations = int(max_evaluations)
+    max_evaluations = plain(max_evaluations)
     if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, int) \
             or max_evaluations < 1:
         raise ScenarioError(f"max_evaluations: a whole number >= 1, got {short(max_evaluations)}")

@@ -105,6 +105,11 @@ def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
 MANIFEST = ".sewfmu-outputs"      # the files the last run wrote into an output folder, one per line
 
 
+def written_by_last_run(folder: Path) -> list[str]:
+    """The files sewfmu's last run wrote into the folder (its manifest), as the user sees them."""
+    return [n for n in _entries_of_last_run(folder) if (Path(folder) / n).is_file()]
+
+
 def _entries_of_last_run(folder: Path) -> list[str]:
     try:
         lines = (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
@@ -152,6 +157,15 @@ def replacing(folder: Path):
         raise
     new = _files_in(staging)
     old = _entries_of_last_run(folder)
+    theirs = [n for n in new if n not in old and os.path.lexists(folder / n)]
+    if theirs:                               # a file sewfmu did not write is never replaced
+        shutil.rmtree(staging, ignore_errors=True)
+        shown = ", ".join(theirs[:3]) + (" ..." if len(theirs) > 3 else "")
+        raise OutputError(f"output folder {folder}: {shown} there {'is' if len(theirs) == 1 else 'are'} "
+                          f"not from sewfmu's last run into it ({MANIFEST} does not list "
+                          f"{'it' if len(theirs) == 1 else 'them'}), and sewfmu replaces only "
+                          f"what it wrote: give another output folder, or move "
+                          f"{'it' if len(theirs) == 1 else 'them'} away")
     for name in set(old) | set(new):
         _remove(folder / name)
     for name in old:                         # the folders the last run made, if now empty
@@ -221,3 +235,20 @@ def set_aside(path: Path) -> Path:
         return aside
     raise OutputError(f"{path}: 9999 earlier records are set aside beside it already; move "
                       f"them away")
+
+
+def drop_torn_line(path: Path) -> None:
+    """A record appended line by line and killed in the middle of a line: that part-line is cut
+    off (the record is sewfmu's own), so that the next line starts clean and a reader of the
+    file sees whole lines only."""
+    with open(path, "r+b") as f:
+        f.seek(0, os.SEEK_END)
+        size = f.tell()
+        if not size:
+            return
+        f.seek(max(0, size - 65536))
+        tail = f.read()
+        if tail.endswith(b"\n"):
+            return
+        cut = tail.rfind(b"\n")
+        f.truncate(size - len(tail) + cut + 1 if cut >= 0 else (0 if size <= 65536 else size))

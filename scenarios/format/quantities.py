@@ -100,6 +100,12 @@ def in_declared_unit(text: str, unit: str, target: str = "the value") -> float:
                       f"{target} wants {_article(_kind(registry, want))} ({unit or '1'})")
     angle_have, angle_want = _has_angle(registry, have.units), _has_angle(registry, want)
     if angle_want and not angle_have and not have.dimensionless:
+        if have.units == registry.Unit("1/s") and "hz" not in given.lower():
+            # the papers (and this catalogue's descriptions) write ω in s⁻¹ meaning rad/s, while
+            # turns per second is rev/s: either reading would be silently wrong for the other
+            raise UnitError(f"{target} = {text!r}: {given} is ambiguous for a rotational speed "
+                            f"(ω in s⁻¹ is radians per second; turns per second are rev/s): "
+                            f"write \"{number:g} rad/s\" or \"{number:g} rev/s\"")
         have = have * registry.turn          # "300 1/min": turns per minute
     elif angle_have != angle_want:
         raise wrong

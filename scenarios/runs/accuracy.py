@@ -61,7 +61,9 @@ def estimate(scenario: Scenario, summary: dict, fmu_dir: Path | None = None) -> 
                 "none": "kinematic: the FMUs give exact positions at every communication point"}
     names = [k for k in analyses.mechanism(scenario.analysis).figures
              if isinstance(summary.get(k), (int, float))]
-    made = coarser(scenario) if names else None
+    if not names:                         # no figures (a narrowed record): nothing to estimate
+        return None
+    made = coarser(scenario)
     if made is None:
         return {"method": None, "figures": {},
                 "none": "no coarser run to compare with (a run of under 4 steps, or the "

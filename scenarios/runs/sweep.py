@@ -27,7 +27,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sewfmu.extras import require
-from sewfmu.scenarios.files.outputs import folder_for, held, remove_debris, write_atomic
+from sewfmu.scenarios.files.outputs import (
+    OutputError,
+    drop_torn_line,
+    folder_for,
+    held,
+    remove_debris,
+    write_atomic,
+)
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
@@ -214,16 +221,38 @@ def finished_points(out_dir: Path) -> dict[str, dict]:
     return done
 
 
+def _refuse_files_not_ours(out_dir: Path) -> None:
+    """A sweep appends to points.jsonl and rewrites sweep.csv: files of those names that are not
+    a sweep's (the user's own) are refused, never appended to or replaced."""
+    record, table = out_dir / POINTS_FILE, out_dir / TABLE_FILE
+    theirs = []
+    if record.is_file() and record.stat().st_size:
+        with open(record, encoding="utf-8", errors="replace") as f:
+            first = next((line for line in f if line.strip()), "")
+        try:
+            ours = isinstance(json.loads(first), dict) and "key" in json.loads(first)
+        except ValueError:
+            ours = False
+        if not ours:
+            theirs.append(POINTS_FILE)
+    if table.is_file() and table.stat().st_size:
+        with open(table, encoding="utf-8", errors="replace") as f:
+            if not f.readline().startswith("index,"):
+                theirs.append(TABLE_FILE)
+    if theirs:
+        raise OutputError(f"output folder {out_dir}: {' and '.join(theirs)} there "
+                          f"{'is' if len(theirs) == 1 else 'are'} not a sewfmu sweep's, and a "
+                          f"sweep would write into {'it' if len(theirs) == 1 else 'them'}: give "
+                          f"another output folder, or move {'it' if len(theirs) == 1 else 'them'}"
+                          f" away")
+
+
 def _open_log(path: Path):
     """points.jsonl for appending, starting on a fresh line (after a torn last line, the next
     row must not be glued onto it)."""
-    log = open(path, "a+b")
-    log.seek(0, os.SEEK_END)
-    if log.tell():
-        log.seek(-1, os.SEEK_END)
-        if log.read(1) != b"\n":
-            log.write(b"\n")
-    return log
+    if path.exists():
+        drop_torn_line(path)
+    return open(path, "ab")
 
 
 def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: int | None = None,
@@ -250,6 +279,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         remove_debris(out_dir, recursive=True)
         settings = settings_of(scenario, paths)
         keys = {p.index: p.identity(settings) for p in points}
+        _refuse_files_not_ours(out_dir)
         done = finished_points(out_dir)
         # longest first: the last points to finish are then short ones, and the workers end together
         todo = sorted((p for p in points if keys[p.index] not in done),

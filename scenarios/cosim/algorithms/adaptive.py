@@ -24,7 +24,7 @@ import numpy as np
 
 from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
 from sewfmu.scenarios.cosim.algorithms.iterative import rate_chains
-from sewfmu.scenarios.cosim.fmi_calls import FmiCallError
+from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError
 from sewfmu.scenarios.cosim.rollback import Rollback
 from sewfmu.scenarios.format.master_settings import AdaptiveSettings
 
@@ -50,6 +50,13 @@ class Adaptive(Jacobi):
                     inst.want_output(v.name, f"{inst.name}.{v.name}")
 
     def start(self, system, step):
+        fixed = [i for i in system.instances
+                 if not getattr(i.md.coSimulation, "canHandleVariableCommunicationStepSize", True)]
+        if fixed:
+            raise CosimError(f"{', '.join(f'{i.name} ({i.md.modelName})' for i in fixed)} takes "
+                             f"only steps of one size (canHandleVariableCommunicationStepSize = "
+                             f"false), and the adaptive master varies them: run it with a "
+                             f"fixed-step master (jacobi, gauss-seidel, iterative)")
         self.h = step
         self.h_min, self.h_max = step * MIN_FRACTION, step * MAX_FACTOR
         self.h_event = step * EVENT_FRACTION
