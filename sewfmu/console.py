@@ -56,6 +56,11 @@ def print_sweep(name: str, rows: list[dict], out: Path) -> None:
         values = ",".join(label_of(k, v) for k, v in row.items()
                           if k not in ("index", "key", "status", "error"))
         print(f"  failed: {values}: {row['error']}")
+    # the sweep's own files (its record, table, plot, report), not the user's beside them
+    written = [n for n in ("sweep.csv", "points.jsonl", f"{name}_sweep.png", "report.html")
+               if (out / n).is_file()] + (["points/"] if (out / "points").is_dir() else [])
+    if written:
+        print(f"  files: {', '.join(written)}")
 
 
 def print_side_by_side(rows, left: str, right: str) -> None:

@@ -45,3 +45,44 @@ def test_a_sweep_leaves_a_users_record_or_table_alone(tmp_path, name, text):
     with pytest.raises(sewfmu.OutputError, match=f"{name} there is not a sewfmu sweep's"):
         sewfmu.sweep("punch_drive", grid={"punch.F30": [1.0, 2.0]}, set=SHORT, out=tmp_path)
     assert (tmp_path / name).read_text() == text
+
+
+def test_a_sweep_lists_its_own_files(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("mine\n")
+    assert main(["sweep", "punch_drive", "--grid", "punch.F30=1,2", "--set",
+                 "experiment.revolutions=1", "--plot", "--out", str(tmp_path), "--quiet"]) == 0
+    files = [line for line in capsys.readouterr().out.splitlines() if "files:" in line]
+    assert files == ["  files: sweep.csv, points.jsonl, punch_drive_sweep.png"]
+
+
+def test_plot_without_an_analysis_says_there_is_nothing_to_draw(tmp_path):
+    sc = sewfmu.load("punch_drive", set=SHORT)
+    sc.analysis, sc.roles = None, {}
+    with pytest.warns(UserWarning, match="--plot: punch_drive has no analysis"):
+        sewfmu.run(sc, out=tmp_path, plot=True)
+    assert (tmp_path / "results.csv").exists() and not list(tmp_path.glob("*.png"))
+
+
+@pytest.mark.slow
+def test_ctrl_c_to_a_sweeps_process_group_prints_one_line_and_no_worker_traceback(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    sewfmu_command = str(Path(sys.executable).with_name("sewfmu"))
+    proc = subprocess.Popen([sewfmu_command, "sweep", "punch_drive", "--grid",
+                             "punch.F30=1,2,3,4", "--set", "experiment.revolutions=3",
+                             "--workers", "2", "--out", str(tmp_path), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    deadline = time.monotonic() + 120          # until the workers run points
+    while not (tmp_path / "points.jsonl").exists() and time.monotonic() < deadline \
+            and proc.poll() is None:
+        time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGINT)         # as a terminal sends Ctrl-C: to every process
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode in (0, 130)
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err

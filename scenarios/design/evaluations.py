@@ -22,7 +22,6 @@ import contextlib
 import csv
 import io
 import math
-import multiprocessing
 import os
 import re
 import sys
@@ -41,7 +40,7 @@ from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
-from sewfmu.scenarios.runs.workers import WorkerDied, _answer, _Worker
+from sewfmu.scenarios.runs.workers import WorkerDied, _answer, _Worker, forkserver_context
 
 OK, INFEASIBLE, FAILED = "ok", "infeasible", "failed"
 LOG_FILE = "evaluations.csv"
@@ -210,8 +209,7 @@ class WorkerPool:
         gives them; an interruption stops every worker."""
         queue = deque(tasks)
         if self.context is None:
-            self.context = multiprocessing.get_context("forkserver")
-            self.context.set_forkserver_preload(self.preload)
+            self.context = forkserver_context(self.preload)
         while len(self.workers) < min(self.size, len(queue)):
             self.workers.append(_Worker(self.context, os.getpid()))
         try:

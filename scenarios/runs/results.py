@@ -43,6 +43,13 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
     from sewfmu.scenarios import animations  # matplotlib and pillow: only when animating
 
     summary = summary_of_runs(scenario, runs)
+    if (plot or animate) and not scenario.analysis:        # asked for, and nothing to draw
+        warnings.warn(f"{'--plot' if plot else '--animate'}: {scenario.name} has no analysis (no "
+                      f"mechanism of sewfmu's named by `analysis`), so there is nothing to draw; "
+                      f"results.csv holds every recorded series", stacklevel=2)
+    elif animate and not animations.can_animate(scenario):
+        warnings.warn(f"--animate: no animation draws {scenario.analysis}'s mechanism",
+                      stacklevel=2)
     against_monolithic = {}
     if report and scenario.analysis and analyses.mechanism(scenario.analysis).monolithic:
         for label, result, own in runs:
@@ -64,13 +71,25 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
         if (plot or report) and scenario.analysis:
             curves = [(label or scenario.name, result) for label, result, _ in runs]
             png = staging / f"{scenario.name}.png"
-            if _drawn(lambda: analyses.module(scenario.analysis).plot(curves, png,
-                                                                       scenario.description),
+            title = f"{scenario.description} ({as_run(scenario)})"
+            if _drawn(lambda: analyses.module(scenario.analysis).plot(curves, png, title),
                       "the plot"):
                 pictures.insert(0, ("key curves of the last revolution", png))
         if report:
             from sewfmu.scenarios.runs.report import run_report  # only with --report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
+
+
+def as_run(scenario: Scenario) -> str:
+    """What was run, as it was run, for a title: the description may name a length that --set
+    changed (it says 10 revolutions; the run had 3)."""
+    if scenario.revolutions is not None:
+        n = scenario.revolutions
+        length = f"{n:g} revolution{'s' if n != 1 else ''} of " \
+                 f"{scenario.shaft or scenario.default_shaft() or 'the shaft'}"
+    else:
+        length = f"stop time {scenario.stop_time:g} s"
+    return f"as run: {length}, step {scenario.step * 1e3:g} ms, {scenario.master} master"
 
 
 def _drawn(draw, what: str) -> bool:

@@ -391,20 +391,17 @@ def declared_unit(scenario: Scenario, target: str) -> str:
 def sweep_title(scenario: Scenario, rows: list[dict], swept: list[str]) -> str:
     """What was run, as it was run: the scenario's description may name a length the sweep's
     settings changed (it says 10 revolutions; --set made them 3)."""
-    if "experiment.revolutions" in swept or "experiment.stop_time" in swept:
-        length = "length as swept"
-    elif scenario.revolutions is not None:
-        length = (f"{scenario.revolutions:g} revolution{'s' if scenario.revolutions != 1 else ''}"
-                  f" of {scenario.shaft or scenario.default_shaft() or 'the shaft'}")
-    else:
-        length = f"stop time {scenario.stop_time:g} s"
+    from sewfmu.scenarios.runs.results import as_run  # loaded on first use (start-up time)
+
     failed = sum(1 for r in rows if r["status"] != "ok")
+    head = (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
+            f"{f' ({failed} failed)' if failed else ''}")
     if scenario.study:                     # computed at each point, not co-simulated
-        return (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
-                f"{f' ({failed} failed)' if failed else ''}; the study computed at each")
-    return (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
-            f"{f' ({failed} failed)' if failed else ''}; each {length}, step "
-            f"{scenario.step * 1e3:g} ms, {scenario.master} master")
+        return f"{head}; the study computed at each"
+    if "experiment.revolutions" in swept or "experiment.stop_time" in swept:
+        return f"{head}; each of the length as swept, step {scenario.step * 1e3:g} ms, " \
+               f"{scenario.master} master"
+    return f"{head}; each {as_run(scenario).removeprefix('as run: ')}"
 
 
 def sweep_figure(rows: list[dict], swept: list[str], figures: dict[str, str],

@@ -53,6 +53,26 @@ def _end_with(main_pid: int) -> None:
     threading.Thread(target=watch, name="sewfmu-watchdog", daemon=True).start()
 
 
+def forkserver_context(preload) -> multiprocessing.context.BaseContext:
+    """The forkserver context, its server started with Ctrl-C ignored: a new Python process
+    interrupted while it starts prints a "Fatal Python error" traceback, and a terminal's Ctrl-C
+    reaches the whole process group. An ignored signal stays ignored through exec, so the server
+    and every worker it forks ignore it (the main process ends them itself); a Ctrl-C to the
+    main process in the few milliseconds of the server's start is lost (pressed again, it
+    counts)."""
+    from multiprocessing import forkserver  # with the context: where its server is started
+
+    context = multiprocessing.get_context("forkserver")
+    if preload:
+        context.set_forkserver_preload(list(preload))
+    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)     # inherited through exec
+    try:
+        forkserver.ensure_running()
+    finally:
+        signal.signal(signal.SIGINT, handler)
+    return context
+
+
 def _serve(conn, main_pid: int) -> None:
     """A worker's life: run tasks from the pipe until told to stop or the pipe closes."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -137,9 +157,7 @@ def run_tasks(tasks: Iterable[tuple[object, Callable, tuple]], workers: int,
         return
     # forkserver: workers fork from a clean server process that has imported the preload once,
     # so they start fast and do not inherit this process's loaded FMU libraries and threads
-    context = multiprocessing.get_context("forkserver")
-    if preload:
-        context.set_forkserver_preload(list(preload))
+    context = forkserver_context(preload)
     main_pid = os.getpid()
     pool = [_Worker(context, main_pid) for _ in range(min(workers, len(queue)))]
     try:
