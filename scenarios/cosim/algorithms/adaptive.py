@@ -25,7 +25,7 @@ import numpy as np
 from sewfmu.scenarios.cosim.algorithms.fixed_step import Jacobi
 from sewfmu.scenarios.cosim.algorithms.iterative import rate_chains
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError
-from sewfmu.scenarios.cosim.rollback import Rollback
+from sewfmu.scenarios.cosim.rollback import Rollback, declares
 from sewfmu.scenarios.format.master_settings import AdaptiveSettings
 
 GROWTH = 4.0
@@ -51,7 +51,7 @@ class Adaptive(Jacobi):
 
     def start(self, system, step):
         fixed = [i for i in system.instances
-                 if not getattr(i.md.coSimulation, "canHandleVariableCommunicationStepSize", True)]
+                 if not declares(i, "canHandleVariableCommunicationStepSize")]
         if fixed:
             raise CosimError(f"{', '.join(f'{i.name} ({i.md.modelName})' for i in fixed)} takes "
                              f"only steps of one size (canHandleVariableCommunicationStepSize = "
