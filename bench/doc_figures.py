@@ -522,6 +522,8 @@ WITHIN_ELSEWHERE = {
     "within 0.001 N (F2_weld_mean) of sewfmu's adaptive run": "OMSimulator, a host built by hand",
     "within 0.2 µm of the exact bouncing": "the held punch against its exact bouncing: "
                                            "tests/test_punch_contact.py",
+    "within 4 % of its μ*": "Morris's μ* against one-at-a-time runs: "
+                            "tests/test_design_examples.py (20 %)",
 }
 
 FIELD = re.compile(r"\{(fig|within|bound|verdict|wall|stamp) ([^ }]+)(?: ([^ }]+))?\}")
