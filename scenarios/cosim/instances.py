@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
 from functools import partial
 from pathlib import Path
 
@@ -128,9 +129,10 @@ class Instance:
     # --- the life of the instance: the FMI calls -----------------------------------------------
     # the instance's code lives in sewfmu's cache of extracted FMUs: keep its bytecode there
     cached = False
+    carried = None        # the pythonfmu package the FMU carries a copy of (pythonfmu_host.py)
 
     def instantiate(self) -> None:
-        with instantiating(keep_bytecode=self.cached):
+        with instantiating(keep_bytecode=self.cached, carried=self.carried):
             self._instantiate()
         self.instantiated = True
         self.bind()
@@ -256,6 +258,8 @@ class Fmi2Instance(Instance):
         super().__init__(name, md, log)
         self.unzip_dir = unzip_dir
         self.cached = is_cached(unzip_dir)
+        self.carried = next((name for name in ("pythonfmu", "pythonfmu3")
+                             if os.path.isdir(os.path.join(unzip_dir, "resources", name))), None)
         self.fmu = None               # fmpy's FMU object, held from instantiation to release
 
     def _take_library(self):
