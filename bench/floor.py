@@ -32,7 +32,7 @@ import numpy as np
 
 import sewfmu
 from sewfmu.scenarios.cosim.master import Master
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.loader import load
 
 ROOT = Path(__file__).resolve().parent.parent

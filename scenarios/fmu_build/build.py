@@ -32,19 +32,15 @@ from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.fmu_build import documentation as fmu_documentation
 from sewfmu.scenarios.fmu_build.carried_reference import carry, default_experiment_output
 
-# what a run needs (paths, versions, the up-to-date check) lives in up_to_date.py, which a run
-# imports without this builder; named here too for the code that builds
-from sewfmu.scenarios.fmu_build.up_to_date import (  # noqa: F401
+# what an FMU is made from and its version: sources.py, which a run imports without this builder
+from sewfmu.scenarios.fmu_build.sources import (  # noqa: F401
     BUILD_DIR,
     MODEL_CODE_DIR,
     VERSION,
     current_version,
     default_fmu_dir,
-    ensure_built,
     fmu_content_hash,
     fmu_version,
-    fmus_for,
-    fmus_for_names,
     model_code_hash,
 )
 

@@ -53,7 +53,7 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from sewfmu.scenarios.fmu_build.up_to_date import fmu_version  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.sources import fmu_version  # loaded on first use (start-up time)
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
