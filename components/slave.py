@@ -413,7 +413,7 @@ class SewSlave(ExceptionFreeAccess, FmuState):
             return False
         if self._set_since_step:
             self._set_since_step.clear()
-            self._held_stale = True       # a rate set with nothing since may now act as zero
+            self._held_stale = bool(self._held)   # (a rate set alone may now be held)
         return True
 
     def _refusal(self, t: float, h: float) -> str | None:
