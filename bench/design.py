@@ -44,7 +44,7 @@ def loop(points) -> float:
 def bare(points) -> float:
     """The floor: the run loop and the analysis alone, FMUs found once (what an evaluation is)."""
     from sewfmu.scenarios.cosim.master import run
-    from sewfmu.scenarios.fmu_build.build import fmus_for
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
     from sewfmu.scenarios.runs.runner import summarize
 
     base = sewfmu.load("punch_drive", set=SET)

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from sewfmu.scenarios.cosim.master import Master
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.loader import load
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim.master import run
-from sewfmu.scenarios.fmu_build.build import ensure_built
+from sewfmu.scenarios.fmu_build.up_to_date import ensure_built
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
 from sewfmu.scenarios.runs.compare import monolithic_summary

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim.master import Master, run
-from sewfmu.scenarios.fmu_build.build import ensure_built, fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import ensure_built, fmus_for
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.runs.compare import monolithic_summary
 from sewfmu.scenarios.runs.runner import summarize

@@ -15,7 +15,7 @@ from fmpy.fmi1 import FMICallException
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim.fmi_calls import LogCollector
 from sewfmu.scenarios.cosim.instances import open_instance
-from sewfmu.scenarios.fmu_build.build import ensure_built
+from sewfmu.scenarios.fmu_build.up_to_date import ensure_built
 
 
 def one_step(path: Path, name: str, h: float, **values) -> tuple[str, float, str]:

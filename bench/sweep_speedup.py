@@ -8,7 +8,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.runs.sweep import points_of, run_sweep
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 import math
 
 from .carriage import CarriageDrive, CarriageDriveParams, CarriageModal, CarriageParams
+from .linkage_slave import LinkageSlave
 from .ports import Port
-from .slave import LinkageSlave, SewSlave
+from .slave import SewSlave
 
 SPEED = 1600 * 2 * math.pi / 60          # the semi-automat's 1600 stitches/min, in rad/s
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import math
 
 from .feed import FeedLinkage, FeedParams
+from .linkage_slave import LinkageSlave
 from .ports import Port
-from .slave import LinkageSlave
 
 
 def _out(name: str, unit: str, description: str, source: str) -> Port:

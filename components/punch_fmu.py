@@ -3,12 +3,14 @@ punch split at the fabric, PunchBody and Fabric."""
 from __future__ import annotations
 
 import math
+from operator import attrgetter
 
+from .linkage_slave import LinkageSlave
 from .ports import Port
 from .punch_contact import GRAVITY, PunchContact, PunchContactParams, PunchState
 from .punch_linkage import PunchLinkage, PunchLinkageParams
 from .punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams
-from .slave import LinkageSlave, SewSlave, fields_of
+from .slave import SewSlave, fields_of
 
 _SETUP_HEIGHT = PunchLinkageParams().xi0    # the punch at the top of the setup position
 _BODY = PunchBodyParams()                    # the defaults the Fabric's start values assume
@@ -68,6 +70,8 @@ class PunchContactSlave(SewSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._state: PunchState | None = None
+        # the model's outputs (a frozen dataclass) read as the row of the ports, in their order
+        self._row_of = attrgetter(*self._row_names)
 
     def _state_now(self) -> PunchState:
         # before initialization ends, the punch rests on its excitation (setup position)
@@ -90,11 +94,27 @@ class PunchContactSlave(SewSlave):
         o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"], u["xi_ddot"])
         return fields_of(o)
 
+    def output_row(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        return self._row_of(self.model().outputs(self._state_now(), u["xi"], u["xi_dot"],
+                                                 u["xi_ddot"]))
+
     def save_internal(self):
         return {} if self._state is None else fields_of(self._state)
 
     def restore_internal(self, saved):
         self._state = PunchState(**saved) if saved else None
+
+    # a PunchState is immutable: the state before a step is the object itself
+    def snapshot(self):
+        return self._state
+
+    def restore_snapshot(self, snapshot):
+        self._state = snapshot
+
+    def state_is_finite(self):
+        s = self._state
+        return s is None or math.isfinite(s.y + s.y_dot + s.F2_max)
 
 
 class PunchBodySlave(PunchContactSlave):
@@ -129,6 +149,11 @@ class PunchBodySlave(PunchContactSlave):
         u = self.extrapolated_inputs(self._elapsed)
         o = self.model().outputs(self._state_now(), u["xi"], u["xi_dot"], u["xi_ddot"], u["F2"])
         return fields_of(o)
+
+    def output_row(self):
+        u = self.extrapolated_inputs(self._elapsed)
+        return self._row_of(self.model().outputs(self._state_now(), u["xi"], u["xi_dot"],
+                                                 u["xi_ddot"], u["F2"]))
 
 
 class FabricSlave(SewSlave):
@@ -180,14 +205,27 @@ class FabricSlave(SewSlave):
         self._t_switch = t + seen.switches[-1][0] if seen.switches else -1.0
 
     def current_outputs(self):
+        return dict(zip(self._row_names, self.output_row()))
+
+    def output_row(self):
         u = self.extrapolated_inputs(self._elapsed)
         fabric = self.model()
         f2 = fabric.force(u["y"], u["y_dot"])
-        return {"F2": f2, "F2_dot": fabric.force_rate(u["y"], u["y_dot"], u["y_ddot"]),
-                "contact": f2 > 0.0, "F2_max": max(self._F2_max, f2), "t_switch": self._t_switch}
+        # F2, F2_dot, contact, F2_max, t_switch
+        return (f2, fabric.force_rate(u["y"], u["y_dot"], u["y_ddot"]), f2 > 0.0,
+                max(self._F2_max, f2), self._t_switch)
 
     def save_internal(self):
         return {"F2_max": self._F2_max, "t_switch": self._t_switch}
 
     def restore_internal(self, saved):
         self._F2_max, self._t_switch = saved["F2_max"], saved["t_switch"]
+
+    def snapshot(self):
+        return self._F2_max, self._t_switch
+
+    def restore_snapshot(self, snapshot):
+        self._F2_max, self._t_switch = snapshot
+
+    def state_is_finite(self):
+        return math.isfinite(self._F2_max + self._t_switch)

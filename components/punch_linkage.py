@@ -17,6 +17,10 @@ import functools
 import math
 from dataclasses import dataclass
 
+try:   # written into an FMU by `sewfmu build`: {repr(parameters): _top_of(parameters)}
+    from .assembly_table import BUILT_TOPS
+except ImportError:      # the model code outside an FMU: each parameter set checked when used
+    BUILT_TOPS: dict[str, tuple[float, float]] = {}
 from .kinematics import (
     RIGHT,
     Motion,
@@ -168,7 +172,11 @@ def _top_of(params: PunchLinkageParams) -> tuple[float, float]:
     """PunchLinkage._top for these parameters, worked out once per parameter set in a process
     (3600 crank angles, about 36 ms): the instances of a sweep's points, the monolithic solution
     and the plots share it. A pure function of frozen parameters, so instances stay independent;
-    a failure is not kept (each instance reports it)."""
+    a failure is not kept (each instance reports it). In an FMU, the default parameters' was
+    worked out (and so checked) when it was built: BUILT_TOPS."""
+    known = BUILT_TOPS.get(repr(params))
+    if known is not None:
+        return known
     bare = object.__new__(PunchLinkage)     # its kinematics need nothing but the parameters
     bare.p = params
     return bare._top()

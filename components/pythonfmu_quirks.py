@@ -28,12 +28,36 @@ class ExceptionFreeAccess:
     """The get and set calls of an FMU's layer, answered without an exception (SewSlave's)."""
 
     def get_reals(self, vrs) -> list[float]:
+        # outputs (every step's call): read from the row of outputs through the table of their
+        # places, the row made once per instant (SewSlave._fill_cache)
+        try:
+            slots = self._real_slots
+            places = [slots[vr] for vr in vrs]
+        except Exception:                 # noqa: BLE001 - not outputs: answered below
+            return self._get_real_values(vrs)
+        row = self._cache
+        if row is None:
+            row = self._fill_cache()
+        return [row[i] for i in places]
+
+    def _get_real_values(self, vrs) -> list[float]:
         try:
             return [float(self._real_getters[vr]()) for vr in vrs]
         except Exception:                 # noqa: BLE001 - an unknown reference: answered below
             return self.get_values(vrs, "Real")
 
     def get_values(self, vrs, kind: str) -> list:
+        if kind == "Boolean":             # Boolean outputs: as get_reals
+            try:
+                slots = self._bool_slots
+                places = [slots[vr] for vr in vrs]
+            except Exception:             # noqa: BLE001 - not outputs: answered below
+                pass
+            else:
+                row = self._cache
+                if row is None:
+                    row = self._fill_cache()
+                return [bool(row[i]) for i in places]
         convert, missing = _CONVERT[kind]
         return [self._get(vr, kind, convert, missing) for vr in vrs]
 
@@ -48,6 +72,21 @@ class ExceptionFreeAccess:
             return missing
 
     def set_reals(self, vrs, values) -> None:
+        # inputs (every step's call): what each input's setter does, once for all of them
+        try:
+            names = [self._input_names[vr] for vr in vrs]
+        except (KeyError, TypeError):     # not all inputs: each by its setter
+            self._set_real_values(vrs, values)
+            return
+        inputs, fresh = self._inputs, self._set_since_step
+        for name, value in zip(names, values):
+            inputs[name] = value
+            fresh.add(name)
+            self._held_stale = True
+            self._elapsed = 0.0
+            self._cache = None
+
+    def _set_real_values(self, vrs, values) -> None:
         try:
             setters = [self._real_setters[vr] for vr in vrs]
         except (KeyError, TypeError):     # not a settable Real: answered below

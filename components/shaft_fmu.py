@@ -24,3 +24,6 @@ class MainShaftSlave(SewSlave):
     def current_outputs(self):
         phi, omega, epsilon = self.model().state(self._time)
         return {"phi": phi, "omega": omega, "epsilon": epsilon}
+
+    def output_row(self):
+        return self.model().state(self._time)        # (phi, omega, epsilon): the ports' order

@@ -1,6 +1,6 @@
 """What every sewfmu FMU does, whichever FMI version carries it.
 
-A concrete FMU subclasses `SewSlave` (or `LinkageSlave`) and declares, as class attributes, its
+A concrete FMU subclasses `SewSlave` (or linkage_slave.LinkageSlave) and declares, as class attributes, its
 parameter dataclass, its inputs, outputs and calculated parameters and its default experiment;
 it implements `build_model`, `initialize`, `advance` and `current_outputs`, which forward to the
 plain-Python model. It is not an FMU by itself: `sewfmu build` joins it with the layer of one FMI
@@ -34,14 +34,14 @@ gives, the same for both:
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence
 
+from .fmu_state import FmuState
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
-from .ports import SHAFT_TAYLOR, Port, held_note, input_bound, input_ranges, shaft_inputs
+from .ports import Port, held_note, input_bound, input_ranges
 from .pythonfmu_quirks import (
     ExceptionFreeAccess,
     describe,
@@ -75,7 +75,7 @@ class Variable:
     max: float | None = None
 
 
-class SewSlave(ExceptionFreeAccess):
+class SewSlave(ExceptionFreeAccess, FmuState):
     """Base of every sewfmu FMU; see the module docstring for what it adds to pythonfmu. An FMI
     layer comes after it in the class's bases and provides `_error(message)`, the register
     of `self.variables` and the names of its calls (`call_names`)."""
@@ -109,6 +109,7 @@ class SewSlave(ExceptionFreeAccess):
             release_state_at_exit(kwargs.get("resources"))
         cls = type(self)
         self.modelName = cls.model_name or cls.__name__
+        self._row_names = tuple(p.name for p in (*cls.outputs, *cls.calculated))
         self.description = (cls.__doc__ or "").strip().splitlines()[0]
         self._param_info = parameter_info(cls.params_class) if cls.params_class else []
         self._params = {p.name: p.default for p in self._param_info}
@@ -117,12 +118,13 @@ class SewSlave(ExceptionFreeAccess):
         # rate inputs the host does not give: see held_inputs
         self._set_since_step: set[str] = set()    # inputs set since the last step taken
         self._held: set[str] = set()              # rates that act as zero
+        self._held_stale = True        # _held is to be worked out again from what was set
         self._elapsed = 0.0            # time since the inputs were last set (for extrapolation)
         self._time = 0.0
         self._initialized = False      # exitInitializationMode has run
         self._broken: str | None = None   # why this instance cannot run (bad parameters)
         self._model = None
-        self._cache: dict[str, Any] | None = None
+        self._cache: list | None = None   # the outputs now, in the order of _row_names
         self._last_error = ""             # the getters log an error once, not at every call
         self.variables = self._declare()
         # value reference -> getter / setter / kind, filled by the layer's register_all
@@ -131,11 +133,24 @@ class SewSlave(ExceptionFreeAccess):
         self._kinds: dict[int, str] = {}
         self._names: dict[int, str] = {}
         self.register_all()
+        # a model without internal state (a linkage, the shaft): nothing to keep for a step
+        self._stateless = cls.save_internal is SewSlave.save_internal
         # the Real ones apart: the batched calls of every step look them up directly
         self._real_getters = {vr: get for vr, get in self._getters.items()
                               if self._kinds[vr] == "Real"}
         self._real_setters = {vr: set_ for vr, set_ in self._setters.items()
                               if self._kinds[vr] == "Real"}
+        # the tables of every step's calls (pythonfmu_quirks.ExceptionFreeAccess): an output's
+        # place in the row of outputs, the input a Real value reference sets
+        slot = {name: i for i, name in enumerate(self._row_names)}
+        outputs = {v.name: v.kind for v in self.variables
+                   if v.causality in ("output", "calculatedParameter")}
+        self._real_slots = {vr: slot[name] for vr, name in self._names.items()
+                            if outputs.get(name) == "Real" and self._kinds[vr] == "Real"}
+        self._bool_slots = {vr: slot[name] for vr, name in self._names.items()
+                            if outputs.get(name) == "Boolean" and self._kinds[vr] == "Boolean"}
+        self._input_names = {vr: name for vr, name in self._names.items()
+                             if name in self._inputs and vr in self._real_setters}
 
     # --- declaration ---------------------------------------------------------------------------
     def _declare(self) -> list[Variable]:
@@ -196,35 +211,49 @@ class SewSlave(ExceptionFreeAccess):
         def set_input(value):
             self._inputs[name] = value
             self._set_since_step.add(name)
+            self._held_stale = True
             self._elapsed = 0.0
             self._cache = None
         return set_input
 
     def _output_getter(self, name: str) -> Callable[[], Any]:
+        index = self._row_names.index(name)
+
         def get_output():
-            if self._cache is None:
-                self._cache = self._outputs_or_nan()
-            return self._cache[name]
+            row = self._cache
+            if row is None:
+                row = self._fill_cache()
+            return row[index]
         return get_output
 
-    def _outputs_or_nan(self) -> dict[str, Any]:
-        """The outputs now; where the model cannot give them (bad parameters, inputs it cannot
-        take), NaN with an Error log line saying why: a getter has no other way to refuse."""
+    def _fill_cache(self) -> list:
+        """The outputs now, kept until an input, a parameter, the time or the state changes;
+        where the model cannot give them (bad parameters, inputs it cannot take), NaN with an
+        Error log line saying why: a getter has no other way to refuse."""
         try:
-            outputs = self.current_outputs()
+            row = self.output_row()
         except Exception as err:          # noqa: BLE001 - any failure is reported, none escapes
             # a NaN input is the cause, not what the model then fails on (a linkage given a NaN
             # angle finds pivots that coincide): name it, to lead to the FMU that failed first
             self._error_once(f"outputs unavailable: {self._nan_input() or describe(err)}")
-            return {p.name: (False if p.kind == "Boolean" else math.nan)
-                    for p in (*type(self).outputs, *type(self).calculated)}
-        bad = _non_finite(outputs)
-        if bad:
-            cause = self._nan_input() or ("the model has left the range where it computes "
-                                          "(inputs or parameters too large?)")
-            self._error_once(f"output {bad} is {outputs[bad]} at t = {self._time:g} s: {cause}",
-                             key=f"output {bad} is {outputs[bad]}")
-        return outputs
+            row = [False if p.kind == "Boolean" else math.nan
+                   for p in (*type(self).outputs, *type(self).calculated)]
+            self._cache = row
+            return row
+        try:
+            finite = math.isfinite(sum(row))   # the common case, in one C loop
+        except TypeError:                      # lists among the values
+            finite = False
+        if not finite:
+            outputs = dict(zip(self._row_names, row))
+            bad = _non_finite(outputs)
+            if bad:
+                cause = self._nan_input() or ("the model has left the range where it computes "
+                                              "(inputs or parameters too large?)")
+                self._error_once(f"output {bad} is {outputs[bad]} at t = {self._time:g} s: "
+                                 f"{cause}", key=f"output {bad} is {outputs[bad]}")
+        self._cache = row
+        return row
 
     # --- the model -----------------------------------------------------------------------------
     def model(self):
@@ -269,7 +298,7 @@ class SewSlave(ExceptionFreeAccess):
         loop) so gets a zero-order hold of them, and a value set once stays where it was set;
         a host that gives the rates gets the Taylor extrapolation. A rate set again counts
         again; where the host set nothing (the FMU run alone), the start values stand."""
-        held = self._note_held_rates()
+        held = self._note_held_rates() if self._held_stale else self._held
         if not held:
             return dict(self._inputs)
         return {name: (0.0 if name in held else x) for name, x in self._inputs.items()}
@@ -284,6 +313,8 @@ class SewSlave(ExceptionFreeAccess):
                     held.discard(rate)
                 elif value in fresh or value in held:
                     held.add(rate)
+        # the same again until an input is set or a step ends: one pass reaches the fixpoint
+        self._held_stale = False
         return held
 
     def extrapolated_inputs(self, dt: float) -> dict[str, float]:
@@ -292,15 +323,17 @@ class SewSlave(ExceptionFreeAccess):
         u = self.held_inputs()
         if dt == 0.0:              # read at the instant the inputs were set: nothing to add
             return u
-        for chain in type(self).taylor_inputs:
-            values = [u[name] for name in chain]
-            for k, name in enumerate(chain[:-1]):
-                total, term = 0.0, 1.0
-                for j, x in enumerate(values[k:]):
-                    if j:
-                        term *= dt / j
-                    total += x * term
-                u[name] = total
+        # the terms dt^j / j!, each as (((1 * dt/1) * dt/2) ...), and each sum from 0.0 in the
+        # order of the chain: the arithmetic of the loop `total += x * term` written out
+        t1 = 1.0 * (dt / 1)
+        t2 = t1 * (dt / 2)
+        for chain in type(self).taylor_inputs:     # (the others: _taylor, the loop itself)
+            if len(chain) == 3:
+                x0, x1, x2 = u[chain[0]], u[chain[1]], u[chain[2]]
+                u[chain[0]] = 0.0 + x0 * 1.0 + x1 * t1 + x2 * t2
+                u[chain[1]] = 0.0 + x1 * 1.0 + x2 * t1
+            else:
+                _taylor(u, chain, dt)
         return u
 
     def _nan_input(self) -> str | None:
@@ -340,36 +373,47 @@ class SewSlave(ExceptionFreeAccess):
     def do_step(self, current_time, step_size):
         t, h = float(current_time), float(step_size)
         # the usual case in one expression (this is the hot path); the reasons only when not
-        if not (self._initialized and self._broken is None and 0.0 < h < math.inf
-                and abs(t - self._time) <= _TIME_TOLERANCE * max(1.0, abs(t), h)
-                and math.isfinite(sum(self._inputs.values()))
-                and all(-bound <= self._inputs[name] <= bound
-                        for name, bound, _ in self._ranges)):
+        inputs = self._inputs
+        usual = (self._initialized and self._broken is None and 0.0 < h < math.inf
+                 and abs(t - self._time) <= _TIME_TOLERANCE * max(1.0, abs(t), h)
+                 and math.isfinite(sum(inputs.values())))
+        if usual:
+            for name, bound, _ in self._ranges:
+                if not -bound <= inputs[name] <= bound:
+                    usual = False
+                    break
+        if not usual:
             refusal = self._refusal(t, h)
             if refusal:
                 self._error(f"doStep({t:g}, {h:g}) refused: {refusal}")
                 return False
-        saved = (self.save_internal(), self._elapsed, self._time)
+        stateless = self._stateless
+        saved = (None if stateless else self.snapshot(), self._elapsed, self._time)
         try:
-            self._note_held_rates()       # which rates act as zero, from what was set
+            if self._held_stale:
+                self._note_held_rates()   # which rates act as zero, from what was set
             self.advance(self.model(), t, h)
             self._time = t + h
             self._elapsed += h
             self._cache = None
             # a state that is no longer finite is not a state: the step is not taken (outputs
             # that overflow from finite state are reported by the getters)
-            bad = _non_finite(self.save_internal())
-            if bad:
-                raise FmuError(f"{bad} would be {self.save_internal()[bad]} at t = {t + h:g} s: "
-                               f"the model has left the range where it computes (inputs or "
-                               f"parameters too large?)")
+            if not (stateless or self.state_is_finite()):
+                bad = _non_finite(self.save_internal())
+                if bad:
+                    raise FmuError(f"{bad} would be {self.save_internal()[bad]} at "
+                                   f"t = {t + h:g} s: the model has left the range where it "
+                                   f"computes (inputs or parameters too large?)")
         except Exception as err:          # noqa: BLE001 - the step is not taken, whatever failed
             internal, self._elapsed, self._time = saved
-            self.restore_internal(internal)
+            if not stateless:
+                self.restore_snapshot(internal)
             self._cache = None
             self._error(f"doStep({t:g}, {h:g}) discarded: {describe(err)}")
             return False
-        self._set_since_step.clear()
+        if self._set_since_step:
+            self._set_since_step.clear()
+            self._held_stale = bool(self._held)   # (a rate set alone may now be held)
         return True
 
     def _refusal(self, t: float, h: float) -> str | None:
@@ -386,52 +430,6 @@ class SewSlave(ExceptionFreeAccess):
                     f"t = {self._time!r} s")
         return self._bad_input()
 
-    # --- FMU state: the model's internal state is part of it -----------------------------------
-    def _get_fmu_state(self) -> dict[str, Any]:
-        return {"params": dict(self._params), "inputs": dict(self._inputs),
-                "elapsed": self._elapsed, "time": self._time, "initialized": self._initialized,
-                "broken": self._broken, "internal": self.save_internal(),
-                "layer": self.save_layer(),
-                "rates": [sorted(self._set_since_step), sorted(self._held)]}
-
-    def _set_fmu_state(self, state: dict[str, Any]) -> None:
-        try:
-            if state["params"] != self._params:
-                self._model = None
-            internal, layer = state["internal"], state["layer"]   # a foreign state fails here
-            fresh, held = state["rates"]
-            self._params = dict(state["params"])
-            self._inputs = dict(state["inputs"])
-            self._elapsed = state["elapsed"]
-            self._time = state["time"]
-            self._initialized = state["initialized"]
-            self._broken = state["broken"]
-            self.restore_internal(internal)
-            self.restore_layer(layer)
-            self._set_since_step, self._held = set(fresh), set(held)
-            self._cache = None
-        except Exception as err:          # noqa: BLE001 - a damaged or foreign state
-            self._error(f"SetFMUState: not a state of this FMU ({describe(err)}); the "
-                        f"instance is left as it was")
-
-    @staticmethod
-    def _fmu_state_to_bytes(state: dict[str, Any]) -> bytes:
-        return json.dumps(state).encode("utf-8")
-
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes) -> dict[str, Any]:
-        try:
-            return json.loads(state.decode("utf-8"))
-        except Exception as err:          # noqa: BLE001 - refused by _set_fmu_state
-            return {"unreadable": describe(err)}
-
-    def save_layer(self) -> dict[str, Any]:
-        """What the FMI layer keeps of its own, as plain JSON-able values."""
-        return {}
-
-    def restore_layer(self, saved: dict[str, Any]) -> None:
-        pass
-
     # --- what each FMU provides ----------------------------------------------------------------
     def build_model(self, params):
         return type(self).model_class(params)
@@ -445,6 +443,24 @@ class SewSlave(ExceptionFreeAccess):
     def current_outputs(self) -> dict[str, Any]:
         raise NotImplementedError
 
+    def output_row(self) -> list | tuple:
+        """The outputs and calculated parameters now, in their declared order (what the getters
+        read; an FMU may give them without the dict of current_outputs)."""
+        outputs = self.current_outputs()
+        return [outputs[name] for name in self._row_names]
+
+    def snapshot(self):
+        """The internal state to come back to if a step fails (restore_snapshot): no copy where
+        the state is immutable."""
+        return self.save_internal()
+
+    def restore_snapshot(self, snapshot) -> None:
+        self.restore_internal(snapshot)
+
+    def state_is_finite(self) -> bool:
+        """Whether the internal state is surely finite (False: look closer, _non_finite)."""
+        return not self.save_internal()
+
     def save_internal(self) -> dict[str, Any]:
         """The internal state as plain JSON-able values."""
         return {}
@@ -453,31 +469,15 @@ class SewSlave(ExceptionFreeAccess):
         pass
 
 
-class LinkageSlave(SewSlave):
-    """An FMU of a linkage driven by the main shaft: its model's `motion(φ, ω, ε)` at the
-    extrapolated shaft inputs gives every output (all direct feedthrough), each read from the
-    motion where its port's `source` says. A linkage FMU only declares."""
-
-    taylor_inputs = SHAFT_TAYLOR
-    speed = 100.0                  # rad/s: the start value of the input omega
-
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        cls.inputs = shaft_inputs(cls.speed)
-        # each output's path into the motion, split once
-        cls._paths = tuple((port.name, tuple((port.source or port.name).split(".")))
-                           for port in cls.outputs)
-
-    def current_outputs(self):
-        u = self.extrapolated_inputs(self._elapsed)
-        motion = self.model().motion(u["phi"], u["omega"], u["epsilon"])
-        return {name: float(_pick(motion, path)) for name, path in type(self)._paths}
-
-
-def _pick(value, path: tuple[str, ...]):
-    for key in path:
-        value = value[key] if isinstance(value, dict) else getattr(value, key)
-    return value
+def _taylor(u: dict[str, float], chain: tuple[str, ...], dt: float) -> None:
+    values = [u[name] for name in chain]
+    for k, name in enumerate(chain[:-1]):
+        total, term = 0.0, 1.0
+        for j, x in enumerate(values[k:]):
+            if j:
+                term *= dt / j
+            total += x * term
+        u[name] = total
 
 
 def _non_finite(values: dict[str, Any]) -> str | None:

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import math
 
+from .linkage_slave import LinkageSlave
 from .ports import Port
-from .slave import LinkageSlave
 from .takeup import TakeupLinkage, TakeupParams
 
 SPEED = 5000 * 2 * math.pi / 60          # the paper's 5000 rpm, in rad/s

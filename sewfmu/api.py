@@ -430,7 +430,7 @@ def _design_scenario(scenario, set):
     """The scenario, its FMU files (built where missing) and their modelDescriptions by
     instance: what a design study checks its ranges and data against before anything runs."""
     from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
 
     sc = load(scenario, set)
     paths = fmus_for(sc)

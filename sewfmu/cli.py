@@ -108,7 +108,7 @@ def cmd_export_ssp(args) -> None:
 
 
 def cmd_export_fmu(args) -> None:
-    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
     from sewfmu.scenarios.interop.export_fmu import export_fmu  # loaded on first use (start-up time)
 
     scenario = _load_with_sets(args.scenario, args.set)
@@ -120,7 +120,7 @@ def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
     from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.build import fmus_for_names  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names  # loaded on first use (start-up time)
     from sewfmu.scenarios.references import regression as references  # loaded on first use (start-up time)
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)

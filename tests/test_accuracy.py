@@ -47,3 +47,26 @@ def test_a_tighter_accuracy_is_a_setting_of_the_experiment():
         sewfmu.run("punch_drive", set={"experiment.step": 1e-3, "experiment.accuracy": 1e-5})
     with pytest.raises(sewfmu.ScenarioError, match="accept_error"):
         sewfmu.load("punch_drive", set={"experiment.accept_error": "yes"})
+
+
+def test_the_estimate_switched_off_makes_no_coarser_run(tmp_path, capsys, monkeypatch):
+    """experiment.accuracy = "off": the run alone, the same series as with the estimate; the
+    summary says why there is none, and nothing but "off" or a positive number is taken."""
+    from sewfmu.scenarios.runs import accuracy
+
+    made = []
+    monkeypatch.setattr(accuracy, "simulate", lambda *a, **k: made.append(a))
+    off = sewfmu.run("punch_drive", set={"experiment.accuracy": "off",
+                                         "experiment.revolutions": 1})
+    assert made == []
+    assert off.summary["coupling_error"] == {"method": None, "figures": {},
+                                             "none": 'experiment.accuracy = "off"'}
+    assert main(["run", "punch_drive", "--set", "experiment.accuracy=off", "--set",
+                 "experiment.revolutions=1", "--out", str(tmp_path / "a")]) == 0
+    assert 'experiment.accuracy = "off"' in capsys.readouterr().out
+    monkeypatch.undo()
+    on = sewfmu.run("punch_drive", set={"experiment.revolutions": 1})
+    assert (off.series == on.series).all()
+    for bad in (0, -1, "on", True):
+        with pytest.raises(sewfmu.ScenarioError, match="experiment.accuracy"):
+            sewfmu.load("punch_drive", set={"experiment.accuracy": bad})

@@ -257,7 +257,7 @@ def test_instances_in_one_process_are_independent(fmus):
 def test_ensure_built_rebuilds_only_what_is_missing_or_stale(fmu_dir, tmp_path):
     import shutil
 
-    from sewfmu.scenarios.fmu_build.build import ensure_built
+    from sewfmu.scenarios.fmu_build.up_to_date import ensure_built
 
     target = tmp_path / "fmus"
     shutil.copytree(fmu_dir, target)

@@ -325,9 +325,9 @@ def doubled_f2(tmp_path_factory) -> Path:
     source = folder / "components"
     shutil.copytree(MODEL_CODE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
     code = (source / "punch_fmu.py").read_text()
-    assert code.count('return {"F2": f2,') == 1
-    (source / "punch_fmu.py").write_text(code.replace('return {"F2": f2,',
-                                                      'return {"F2": 2.0 * f2,'))
+    assert code.count("return (f2, fabric.force_rate(") == 1      # the Fabric's F2 output
+    (source / "punch_fmu.py").write_text(code.replace("return (f2, fabric.force_rate(",
+                                                      "return (2.0 * f2, fabric.force_rate("))
     return build_fmu("Fabric", folder / "fmus", source=source)
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
 from functools import partial
 from pathlib import Path
 
@@ -124,13 +125,22 @@ class Instance:
         self.in_vr, self.in_buf, self.n_in = arrays([i for i, _, _ in self.inputs], fmi2Real)
         # where each input comes from: (source, index in its real outputs)
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
+        # all from one source's outputs in a row (a linkage fed by the shaft): that slice of
+        # its buffer is copied at once
+        first = self.in_sources[0] if self.in_sources else None
+        self.in_block = None
+        if first and all(src is first[0] and idx == first[1] + k
+                         for k, (src, idx) in enumerate(self.in_sources)):
+            self.in_block = (first[0], first[1], first[1] + len(self.in_sources))
 
     # --- the life of the instance: the FMI calls -----------------------------------------------
     # the instance's code lives in sewfmu's cache of extracted FMUs: keep its bytecode there
     cached = False
+    carried = None        # the pythonfmu package the FMU carries a copy of (pythonfmu_host.py)
+    in_block = None       # (source, start, stop): the inputs are that slice of its outputs
 
     def instantiate(self) -> None:
-        with instantiating(keep_bytecode=self.cached):
+        with instantiating(keep_bytecode=self.cached, carried=self.carried):
             self._instantiate()
         self.instantiated = True
         self.bind()
@@ -190,8 +200,13 @@ class Instance:
     def pull_inputs(self) -> None:
         if self.n_in:
             buf = self.in_buf
-            for k, (src, idx) in enumerate(self.in_sources):
-                buf[k] = src.out_buf[idx]
+            block = self.in_block
+            if block is not None:
+                src, start, stop = block
+                buf[:] = src.out_buf[start:stop]
+            else:
+                for k, (src, idx) in enumerate(self.in_sources):
+                    buf[k] = src.out_buf[idx]
             self.set_inputs()
 
     def pull_changed_inputs(self) -> bool:
@@ -222,7 +237,7 @@ class Instance:
                 self.check("get outputs", status)
             # a NaN or infinite output stops the run here, naming its FMU (sewfmu's FMUs log
             # why; a getter cannot refuse), rather than in the FMU it would be passed to
-            if not math.isfinite(sum(self.out_buf)):
+            if not math.isfinite(sum(self.out_buf[:])):      # (a list first: faster)
                 bad = [n for n, x in zip(self.real_out, self.out_buf) if not math.isfinite(x)]
                 if bad:
                     if not self.log.errors_of(self.name):
@@ -256,6 +271,8 @@ class Fmi2Instance(Instance):
         super().__init__(name, md, log)
         self.unzip_dir = unzip_dir
         self.cached = is_cached(unzip_dir)
+        self.carried = next((name for name in ("pythonfmu", "pythonfmu3")
+                             if os.path.isdir(os.path.join(unzip_dir, "resources", name))), None)
         self.fmu = None               # fmpy's FMU object, held from instantiation to release
 
     def _take_library(self):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import importlib
 import sys
 
 # Every FMU library this process loaded (one dlopen per instance), released at exit while the
@@ -45,11 +46,16 @@ def _release_libraries() -> None:
 
 
 @contextlib.contextmanager
-def instantiating(keep_bytecode: bool = False):
+def instantiating(keep_bytecode: bool = False, carried: str | None = None):
     """Around an instantiation: whatever it does to sys.path is undone (see above); with
     `keep_bytecode` (an FMU extracted into sewfmu's cache, scenarios/cosim/fmu_cache.py) the code it
     imports leaves its bytecode there even where PYTHONDONTWRITEBYTECODE is set, so that the next
-    run, in any process, does not compile it again."""
+    run, in any process, does not compile it again. `carried`: the package of pythonfmu the FMU
+    carries a copy of ("pythonfmu", "pythonfmu3"); the installed one is imported first, so that
+    the FMU's copy (without binaries) never takes its place in sys.modules, where a build made
+    later in this process would find it (a run no longer imports the builder first)."""
+    if carried and carried not in sys.modules:
+        importlib.import_module(carried)
     saved, writes = list(sys.path), sys.dont_write_bytecode
     if keep_bytecode:
         sys.dont_write_bytecode = False

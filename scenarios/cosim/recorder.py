@@ -79,15 +79,20 @@ class Recorder:
         self.times = np.empty(size)
         self.data = np.empty((size, len(columns)))
         self.length = 0
+        self._cells: list | None = None
 
     def record(self, t: float) -> None:
         row = self.length
         if row == len(self.times):
             self._grow(t)
         self.times[row] = t
-        out = self.data[row]
-        for j, (inst, kind, idx) in enumerate(self.plan):
-            out[j] = inst.out_buf[idx] if kind == "real" else inst.bool_buf[idx]
+        # the row filled at once, from each column's buffer and place (fixed once the
+        # instances are prepared: _cells)
+        cells = self._cells
+        if cells is None:
+            cells = self._cells = [(inst.out_buf if kind == "real" else inst.bool_buf, idx)
+                                   for inst, kind, idx in self.plan]
+        self.data[row] = [buf[idx] for buf, idx in cells]
         self.length = row + 1
 
     def _grow(self, t: float) -> None:

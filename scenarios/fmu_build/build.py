@@ -13,7 +13,6 @@ An FMU is a concrete slave class of the model code joined with one FMI layer in 
 """
 from __future__ import annotations
 
-import hashlib
 import importlib
 import importlib.util
 import os
@@ -22,7 +21,6 @@ import sys
 import tempfile
 import zipfile
 from pathlib import Path
-from xml.etree import ElementTree
 
 # The installed pythonfmu and pythonfmu3, imported before any FMU is instantiated in this process:
 # an FMU imports the pythonfmu(3) it finds, and if that were its embedded copy (no binaries), that
@@ -30,18 +28,21 @@ from xml.etree import ElementTree
 import pythonfmu  # noqa: F401
 import pythonfmu3  # noqa: F401
 
-import sewfmu.components
-from sewfmu._version import __version__
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.fmu_build import documentation as fmu_documentation
 from sewfmu.scenarios.fmu_build.carried_reference import carry, default_experiment_output
-from sewfmu.scenarios.format.values import ScenarioError
 
-# the model code every FMU carries: all of components/, nothing else
-MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent
-BUILD_DIR = Path(__file__).resolve().parent
-VERSION = __version__     # sewfmu's one version (sewfmu/_version.py)
-
+# what an FMU is made from and its version: sources.py, which a run imports without this builder
+from sewfmu.scenarios.fmu_build.sources import (  # noqa: F401
+    BUILD_DIR,
+    MODEL_CODE_DIR,
+    VERSION,
+    current_version,
+    default_fmu_dir,
+    fmu_content_hash,
+    fmu_version,
+    model_code_hash,
+)
 
 # The FMU's entry script. pythonfmu 0.7.0's binary imports it as a module and then, at every
 # instantiation, executes it once more into a fresh namespace and looks there for a class whose
@@ -108,58 +109,6 @@ class {name}(_Slave, _Layer, Fmi3Slave):
 '''
 
 
-def default_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
-    """fmus/ beside the project's pyproject.toml, or ./fmus for an installed copy;
-    SEWFMU_FMU_DIR overrides both, `base` all three. The FMI 3.0 FMUs go into its folder
-    fmi3/."""
-    if base:
-        base = Path(base)
-    elif os.environ.get("SEWFMU_FMU_DIR"):
-        base = Path(os.environ["SEWFMU_FMU_DIR"])
-    elif (MODEL_CODE_DIR.parent / "pyproject.toml").exists():
-        base = MODEL_CODE_DIR.parent / "fmus"
-    else:
-        base = Path.cwd() / "fmus"
-    return base / "fmi3" if fmi == 3 else base
-
-
-def _hash_of(*folders: Path) -> str:
-    digest = hashlib.sha256()
-    for folder in folders:
-        for path in sorted(Path(folder).glob("*.py")):
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
-
-
-def model_code_hash(source: Path = MODEL_CODE_DIR) -> str:
-    """Hash of the model code every FMU carries: the name and bytes of each .py file in
-    components/ (the FMI 2.0 and 3.0 layers both; nothing outside that folder). It names the
-    package inside the FMU: same code, same name."""
-    return _hash_of(source)
-
-
-def fmu_content_hash(source: Path = MODEL_CODE_DIR) -> str:
-    """Hash of everything an FMU is made from: the model code (components/) and this build
-    (fmu_build/: the entry script, the carried reference, the documentation page). It is the
-    FMU's version: an edit of either rebuilds the FMUs."""
-    return _hash_of(source, BUILD_DIR)
-
-
-def fmu_version(fmu_path: Path) -> str | None:
-    """The version attribute of an FMU's modelDescription, or None if unreadable."""
-    try:
-        with zipfile.ZipFile(fmu_path) as zf:
-            root = ElementTree.fromstring(zf.read("modelDescription.xml"))
-    except (OSError, KeyError, zipfile.BadZipFile, ElementTree.ParseError):
-        return None
-    return root.get("version")
-
-
-def current_version() -> str:
-    return f"{VERSION}+{fmu_content_hash()}"
-
-
 def _builder(fmi: int):
     if fmi == 3:
         from pythonfmu3.builder import FmuBuilder  # the builders: only when building
@@ -202,6 +151,8 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
             shutil.copy2(source / f"{mod}.py", pkg_dir / f"{mod}.py")
         # Import every module with the package: a host that loads this FMU again from another
         # unzip directory (or deletes the first one) then finds the whole package in sys.modules.
+        if source.resolve() == MODEL_CODE_DIR:
+            _write_assembly_table(pkg_dir)
         (pkg_dir / "__init__.py").write_text(
             f'"""sewfmu model code {tag}, as carried by this FMU."""\n'
             + "".join(f"from . import {mod}  # noqa: F401\n" for mod in modules))
@@ -243,6 +194,23 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
     return Path(out)
 
 
+def _write_assembly_table(pkg_dir: Path) -> None:
+    """The punch six-bar's assembly check for its default parameters (3600 crank angles), done
+    once here rather than at every instantiation in every process: the crank angle and height
+    of the slider's top, exactly (repr), which the FMU's punch_linkage._top_of reads. Only for
+    this package's own model code (a modified copy checks at instantiation, as without it)."""
+    from sewfmu.components.punch_linkage import (  # the model: only when building
+        PunchLinkageParams,
+        _top_of,
+    )
+
+    params = PunchLinkageParams()
+    alpha0, y_top = _top_of(params)
+    (pkg_dir / "assembly_table.py").write_text(
+        '"""Written by sewfmu build: the punch six-bar\'s top for its default parameters."""\n'
+        f"BUILT_TOPS = {{{repr(params)!r}: ({alpha0!r}, {y_top!r})}}\n")
+
+
 def _describe_sources(fmu: Path, model_identifier: str) -> None:
     """FMI 3.0 asks an FMU that ships sources (pythonfmu3 puts its C++ export library's into
     sources/) for sources/buildDescription.xml: which files to compile, and how."""
@@ -278,49 +246,3 @@ def _module_of(package: str, module: str, source: Path):
 
 def build_all(dest: Path | None = None, fmi: int = 2) -> list[Path]:
     return [build_fmu(name, dest, fmi=fmi) for name in FMUS]
-
-
-def ensure_built(names, dest: Path | None = None, fmi: int = 2) -> dict[str, Path]:
-    """Paths of the named FMUs, (re)building any that is missing or carries other code."""
-    dest = Path(dest or default_fmu_dir(fmi))
-    version = current_version()
-    paths = {}
-    for name in names:
-        path = dest / f"{name}.fmu"
-        if fmu_version(path) != version:
-            build_fmu(name, dest, fmi=fmi)
-        paths[name] = path
-    return paths
-
-
-def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
-                   fmi: int = 2) -> dict[str, Path]:
-    """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
-    (default: fmus/; FMI 3.0: its folder fmi3/)."""
-    return ensure_built(sorted(names), default_fmu_dir(fmi, fmu_dir), fmi=fmi)
-
-
-def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
-    """The FMU file of each FMU type a scenario uses: the files it names (an SSP system's own,
-    a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale."""
-    from sewfmu.scenarios.format.fmu_file import (  # loaded on first use (start-up time)
-        fmu_path,
-        is_fmu_file,
-        read_fmu,
-    )
-
-    names = sorted({inst.fmu for inst in scenario.instances.values()})
-    found = {name: scenario.fmu_files[name] for name in names if name in scenario.fmu_files}
-    for name in names:
-        if name not in found and is_fmu_file(name):
-            # an instance added in Python names the file itself (a scenario file's are in
-            # fmu_files): from the folder the process runs in, as Python's open() takes it
-            where = f"{scenario.source}: fmu {name!r}"
-            found[name] = fmu_path(name, Path.cwd(), where)
-            read_fmu(found[name], where)
-    unknown = [n for n in names if n not in found and n not in FMUS]
-    if unknown:
-        raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
-                            f"(known: {', '.join(FMUS)}; or the path of an .fmu file)")
-    own = [n for n in names if n not in found]
-    return {**found, **(fmus_for_names(own, fmu_dir, scenario.fmi) if own else {})}

@@ -42,8 +42,9 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
     ExperimentKey("fmi", "FMI version of sewfmu's FMUs the run uses: 2 or 3", "2", "3"),
     ExperimentKey("accuracy", "the coupling error a run's key figures may carry, relative to "
                   "each figure; estimated by the same run at twice the step (the adaptive "
-                  "master: 8 times its tolerance); beyond it the run says so and fails",
-                  "0.05", "0.01"),
+                  "master: 8 times its tolerance); beyond it the run says so and fails; "
+                  "\"off\": no estimate and no coarser run (half the work of a fixed-step run "
+                  "less)", "0.05", '0.01, or "off"'),
     ExperimentKey("accept_error", "true: a run beyond its accuracy succeeds all the same (its "
                   "estimate is still reported)", "false", "true"),
 )}

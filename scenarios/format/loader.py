@@ -11,7 +11,6 @@ from pathlib import Path
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.format.parse import from_dict
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.ssp_import import load_ssp
 from sewfmu.scenarios.format.values import ScenarioError
 
 
@@ -41,6 +40,8 @@ def load(name_or_path: str) -> Scenario:
     """A catalogue scenario, a TOML scenario file, or an SSP system (.ssp or .ssd)."""
     path = resolve(name_or_path)
     if path.suffix.lower() in (".ssp", ".ssd"):
+        from sewfmu.scenarios.format.ssp_import import load_ssp  # only for an SSP file (start-up time)
+
         return load_ssp(path)
     try:
         text = _text_of(path.read_bytes(), path)

@@ -57,7 +57,8 @@ class Scenario:
     tolerance_master: str | None = None     # the master a file's tolerance was given for
     acceleration: str = "aitken"                          # iterative master
     fmi: int = 2                      # the FMI version of sewfmu's FMUs it runs (2 or 3)
-    accuracy: float = 0.05            # the relative coupling error its key figures may carry
+    accuracy: float | str = 0.05      # the relative coupling error its key figures may carry;
+                                      # "off": not estimated
     accept_error: bool = False        # a run beyond its accuracy succeeds all the same
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/format/ssp_import.py): its own FMUs
@@ -220,7 +221,10 @@ class Scenario:
             self.fmi = int(value)
             return
         if key == "accuracy":
-            self.accuracy = positive(value, f"{origin} experiment.accuracy")
+            # "off": no estimate, no coarser run (a benchmark against a plain loop, a run whose
+            # figures are not read)
+            self.accuracy = "off" if value == "off" else \
+                positive(value, f"{origin} experiment.accuracy (a positive number, or \"off\")")
             return
         if key == "accept_error":
             if not isinstance(value, bool):

@@ -41,7 +41,8 @@ from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.cosim.system import check_parameters
 from sewfmu.scenarios.files.outputs import OutputError
-from sewfmu.scenarios.fmu_build.build import current_version, fmus_for_names
+from sewfmu.scenarios.fmu_build.sources import current_version
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 

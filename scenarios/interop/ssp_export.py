@@ -19,7 +19,7 @@ from fmpy import read_model_description
 from sewfmu.components.units import UNITS
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
 from sewfmu.scenarios.format.scenario import Scenario
 

@@ -56,6 +56,9 @@ def estimate(scenario: Scenario, summary: dict, fmu_dir: Path | None = None) -> 
     "failed": the reason the coarser run gave none; None for a scenario without key figures."""
     if not scenario.analysis:
         return None
+    if scenario.accuracy == "off":
+        return {"method": None, "figures": {},
+                "none": "experiment.accuracy = \"off\""}
     if analyses.mechanism(scenario.analysis).kinematic:
         return {"method": None, "figures": {},
                 "none": "kinematic: the FMUs give exact positions at every communication point"}

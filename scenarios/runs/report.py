@@ -219,7 +219,7 @@ def study_report(path: Path, name: str, study, headline: dict, picture: Path) ->
     shown = Section("Pictures")
     shown.pictures([(study.description, picture)])
     what = Section("What was run")
-    from sewfmu.scenarios.fmu_build.build import VERSION  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.sources import VERSION  # loaded on first use (start-up time)
     what.table(["", ""], [["study", name], ["sewfmu", VERSION]])
     write(path, f"sewfmu: {name}", study.description, [figures, shown, what])
 

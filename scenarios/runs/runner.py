@@ -6,7 +6,7 @@ from pathlib import Path
 
 from sewfmu.scenarios import analyses
 from sewfmu.scenarios.cosim.master import RunResult, run
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
 
 

@@ -61,7 +61,7 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from sewfmu.scenarios.fmu_build.build import fmu_version  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.sources import fmu_version  # loaded on first use (start-up time)
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
@@ -261,7 +261,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
     """Run every point not yet done in out_dir; return all rows, in point order."""
     from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
     from sewfmu.scenarios.cosim.system import check_parameters  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.build import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):

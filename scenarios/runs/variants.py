@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from sewfmu.scenarios.cosim.master import RunResult, run
-from sewfmu.scenarios.fmu_build.build import fmus_for
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import label_of
 from sewfmu.scenarios.runs import accuracy

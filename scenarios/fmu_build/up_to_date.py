@@ -1,0 +1,60 @@
+"""Which FMU files a run uses, and whether they are up to date, without the builder: an FMU is
+current when the version in its modelDescription is sewfmu's version and the content hash of
+the code it is made from (components/ and fmu_build/: sources.py), so a run checks its FMUs by
+a stat of some fifty source files and of each FMU file (each read and hashed once per process
+while unchanged), and imports the builders (build.py: pythonfmu's and pythonfmu3's,
+xml.dom.minidom) only when an FMU is missing or stale."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from sewfmu.components.registry import FMUS
+from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
+from sewfmu.scenarios.format.values import ScenarioError
+
+
+def ensure_built(names, dest: Path | None = None, fmi: int = 2) -> dict[str, Path]:
+    """Paths of the named FMUs, (re)building any that is missing or carries other code."""
+    dest = Path(dest or default_fmu_dir(fmi))
+    version = current_version()
+    paths = {}
+    for name in names:
+        path = dest / f"{name}.fmu"
+        if fmu_version(path) != version:
+            from sewfmu.scenarios.fmu_build.build import build_fmu  # the builders: only to build
+            build_fmu(name, dest, fmi=fmi)
+        paths[name] = path
+    return paths
+
+
+def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
+                   fmi: int = 2) -> dict[str, Path]:
+    """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
+    (default: fmus/; FMI 3.0: its folder fmi3/)."""
+    return ensure_built(sorted(names), default_fmu_dir(fmi, fmu_dir), fmi=fmi)
+
+
+def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
+    """The FMU file of each FMU type a scenario uses: the files it names (an SSP system's own,
+    a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale."""
+    from sewfmu.scenarios.format.fmu_file import (  # loaded on first use (start-up time)
+        fmu_path,
+        is_fmu_file,
+        read_fmu,
+    )
+
+    names = sorted({inst.fmu for inst in scenario.instances.values()})
+    found = {name: scenario.fmu_files[name] for name in names if name in scenario.fmu_files}
+    for name in names:
+        if name not in found and is_fmu_file(name):
+            # an instance added in Python names the file itself (a scenario file's are in
+            # fmu_files): from the folder the process runs in, as Python's open() takes it
+            where = f"{scenario.source}: fmu {name!r}"
+            found[name] = fmu_path(name, Path.cwd(), where)
+            read_fmu(found[name], where)
+    unknown = [n for n in names if n not in found and n not in FMUS]
+    if unknown:
+        raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
+                            f"(known: {', '.join(FMUS)}; or the path of an .fmu file)")
+    own = [n for n in names if n not in found]
+    return {**found, **(fmus_for_names(own, fmu_dir, scenario.fmi) if own else {})}
