@@ -14,7 +14,7 @@ from sewfmu._version import __version__
 __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "parameters",
            "scenarios",
            "Run", "Sweep", "Scenario", "Error", "ScenarioError", "CosimError", "OutputError",
-           "Diverged", "optimize", "fit", "sensitivity"]
+           "Diverged", "optimize", "fit", "sensitivity", "app"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
@@ -26,7 +26,8 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
          "Diverged": "sewfmu.scenarios.cosim.divergence",
          # the design studies (docs/design.md)
-         **{name: "sewfmu.api" for name in ("optimize", "fit", "sensitivity")}}
+         **{name: "sewfmu.api" for name in ("optimize", "fit", "sensitivity")},
+         "app": "sewfmu.app"}             # the page (docs/app.md)
 
 
 def scenarios() -> list[str]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.analyses import figure_units, figures_of
@@ -105,6 +105,7 @@ class Run:
     out: Path | None = None
     runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
     shaft: str | None = None                  # the MainShaft whose turns revolution() counts
+    scenario: Scenario | None = field(default=None, repr=False)    # as run, values applied
 
     @property
     def figures(self) -> dict:
@@ -126,6 +127,24 @@ class Run:
 
         return revolution(self.series, f"{self.shaft or 'shaft'}.phi", k, self.name)
 
+    def mechanism(self, frames: int = 36) -> dict:
+        """The mechanism at `frames` equally spaced crank angles of the last revolution, as
+        numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
+        [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
+        point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
+        from sewfmu.scenarios.animations import linkage  # loaded on first use (start-up time)
+        from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
+
+        if self.scenario is None or self.series is None:
+            raise ScenarioError(f"{self.name}: no recorded run to draw (a [compare] run: take "
+                                f"one of run.runs)")
+        columns = {n: self.series[n] for n in self.series.dtype.names if n != "time"}
+        result = RunResult(self.scenario, self.series["time"], columns, 0.0)
+        try:
+            return linkage(result, frames)
+        except Error as err:
+            raise ScenarioError(f"{self.name}: {err}") from None
+
     def __repr__(self) -> str:
         if self.runs:
             return f"<sewfmu.Run {self.name}: {len(self.runs)} runs {list(self.runs)}>"
@@ -139,7 +158,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
-    a progress bar on the terminal."""
+    a progress bar on the terminal; a function instead, `progress(done, total)`, hears of the
+    communication steps as they are done (a page's progress bar)."""
     from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_outputs  # loaded on first use (start-up time)
@@ -152,9 +172,10 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     out, fmu_dir = _folder(out, "out"), _folder(fmu_dir, "fmu_dir")
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
-    bar = TerminalProgress(sc.name) if progress else None
+    bar = TerminalProgress(sc.name) if progress is True else None
+    told = (lambda label, done, total: progress(done, total)) if callable(progress) else bar
     try:
-        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, bar)
+        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, told)
     finally:
         if bar is not None:
             bar.close()
@@ -188,7 +209,7 @@ def _run_of(name: str, result, summary: dict, out: Path | None, shaft: str | Non
         series[n] = result.columns[n]
     units = {"time": "s", **{n: result.units.get(n, "") for n in names},
              **summary.get("units", {})}
-    return Run(name, summary, series, units, out, shaft=shaft)
+    return Run(name, summary, series, units, out, shaft=shaft, scenario=result.scenario)
 
 
 @dataclass
@@ -247,11 +268,13 @@ class SweepFailed(ScenarioError):
 def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
-          report: bool = False, progress: bool = False, results: bool = False) -> Sweep:
+          report: bool = False, progress: bool = False, results: bool = False,
+          on_point: Callable[[dict], None] | None = None) -> Sweep:
     """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
     writes (and an interrupted sweep into the same folder resumes); `results` keeps each point's
-    results.csv there. A sweep whose every point failed is a ScenarioError."""
+    results.csv there. `on_point(row)` hears of each point as it finishes (its row as in
+    `rows`, in the order they finish). A sweep whose every point failed is a ScenarioError."""
     from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
         points_of,
         run_sweep,
@@ -278,7 +301,8 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         folder = Path(out) if out is not None else Path(scratch)
         try:
             rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
-                             keep_results=results and out is not None, progress=progress)
+                             keep_results=results and out is not None, progress=progress,
+                             on_point=on_point)
         except OSError as err:
             raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
                 from None

@@ -405,6 +405,9 @@ def _design_commands(sub) -> None:
     from sewfmu.design_cli import add_commands  # a module of their own: this one's size
 
     add_commands(sub)
+    from sewfmu.app.command import add_command  # the page's command: its own package
+
+    add_command(sub)
 
 
 if __name__ == "__main__":

@@ -100,7 +100,7 @@ def explain(err: Exception, command: str) -> str:
 # the optional packages and the extra of pyproject.toml that installs each
 EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
           "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
-          "pandas": "pandas", "SALib": "design"}
+          "pandas": "pandas", "SALib": "design", "dash": "app", "plotly": "app"}
 
 
 def install_command(extra: str) -> str:
