@@ -131,6 +131,20 @@ def test_nothing_but_the_front_doors_imports_the_design_studies():
     assert not broken, broken
 
 
+def test_the_page_is_a_client_of_the_public_api():
+    """sewfmu.app (docs/app.md) imports sewfmu and its public names, nothing of the wings; and
+    nothing inside imports the page."""
+    _, edges = _graph()
+    broken = sorted(f"{source} imports {target}" for source, targets in edges.items()
+                    if _under(source, "sewfmu.app")
+                    for target in targets if _under(target, "sewfmu.scenarios")
+                    or _under(target, "sewfmu.components"))
+    broken += sorted(f"{source} imports {target}" for source, targets in edges.items()
+                     if _under(source, "sewfmu.scenarios") or _under(source, "sewfmu.components")
+                     for target in targets if _under(target, "sewfmu.app"))
+    assert not broken, broken
+
+
 def test_scenarios_keeps_only_its_wings_at_its_top():
     top = sorted(p.name for p in (REPO / "scenarios").glob("*.py"))
     assert top == ["__init__.py"], top

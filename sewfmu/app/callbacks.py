@@ -11,8 +11,9 @@ import numpy as np
 from dash import ALL, Input, Output, State, ctx, html
 
 import sewfmu
-from sewfmu.app import drawing, layout
+from sewfmu.app.drawing import mechanism_figure, series_figure, sweep_figure
 from sewfmu.app.files import present
+from sewfmu.app.layout import FRAME_DEG, figures, runs_table, value_inputs
 from sewfmu.app.values import value_of
 
 NOT = dash.no_update
@@ -34,7 +35,7 @@ def register(app, page) -> None:
         if label not in page.choices:
             return [], {}, "", [], []
         source = page.choices[label]
-        cells, defaults = layout.value_inputs(source)
+        cells, defaults = value_inputs(source)
         numeric = [n for n, v in defaults.items() if isinstance(value_of(v), (int, float))]
         return cells, defaults, sewfmu.load(source).description, numeric, numeric
 
@@ -78,11 +79,11 @@ def register(app, page) -> None:
                   Input("runs", "data"), State("series", "value"))
     def show_figures(runs, chosen):
         if not runs:
-            return layout.figures(None), "key figures", [], []
+            return figures(None), "key figures", [], []
         newest = runs[-1]
         names = [n for n in page.variant(newest)["series"] if n not in ("crank_deg", "time")]
         chosen = [c for c in chosen or [] if c in names] or _default_series(names)
-        return (layout.figures(newest), f"key figures of {newest['label']}",
+        return (figures(newest), f"key figures of {newest['label']}",
                 [{"label": f"{n} [{newest['units'].get(n, '')}]", "value": n} for n in names],
                 chosen)
 
@@ -93,7 +94,7 @@ def register(app, page) -> None:
         ticked = set(ticked or []) | {runs[-1]["key"]}
         for run in runs:      # report.html comes after the figures: its link when it is there
             run["files"] = present(page.root, run["id"])
-        return layout.runs_table(runs, list(ticked))
+        return runs_table(runs, list(ticked))
 
     @app.callback(Output("ticked", "data"), Input({"type": "tick", "key": ALL}, "value"),
                   prevent_initial_call=True)
@@ -104,17 +105,17 @@ def register(app, page) -> None:
                   Input("angle", "value"), State("runs", "data"))
     def plot(ticked, columns, angle, runs):
         shown = [(r["label"], page.variant(r)) for r in runs or [] if r["key"] in (ticked or [])]
-        return drawing.series_figure(shown, columns or [], angle if shown else None)
+        return series_figure(shown, columns or [], angle if shown else None)
 
     @app.callback(Output("mechanism", "figure"), Input("ticked", "data"), Input("angle", "value"),
                   State("runs", "data"))
     def mechanism(ticked, angle, runs):
         shown = [r for r in runs or [] if r["key"] in (ticked or [])]
         if not shown:
-            return drawing.mechanism_figure(None, 0)
+            return mechanism_figure(None, 0)
         run = shown[-1]
-        return drawing.mechanism_figure(page.variant(run)["mechanism"],
-                                        round((angle or 0) / layout.FRAME_DEG), run["label"])
+        return mechanism_figure(page.variant(run)["mechanism"],
+                                        round((angle or 0) / FRAME_DEG), run["label"])
 
     @app.callback(Output("tick", "disabled"), Output("play", "children"),
                   Input("play", "n_clicks"), State("tick", "disabled"),
@@ -125,7 +126,7 @@ def register(app, page) -> None:
     @app.callback(Output("angle", "value"), Input("tick", "n_intervals"), State("angle", "value"),
                   prevent_initial_call=True)
     def step(_n, angle):
-        return ((angle or 0) + layout.FRAME_DEG) % 360
+        return ((angle or 0) + FRAME_DEG) % 360
 
     @app.callback(Output("sweep-job", "data"), Output("sweep-poll", "disabled"),
                   Output("sweep-progress", "value"), Output("sweep-status", "children"),
@@ -189,7 +190,7 @@ def register(app, page) -> None:
         names = list(dict.fromkeys(k for r in data["rows"] for k, v in r.items()
                                    if k not in skip and isinstance(v, (int, float))))
         figure = figure if figure in names else (names[0] if names else None)
-        return drawing.sweep_figure(data["rows"], data["swept"], figure, data["units"]), \
+        return sweep_figure(data["rows"], data["swept"], figure, data["units"]), \
             names, figure
 
 

@@ -18,7 +18,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sewfmu.app import worker
+from sewfmu.app.worker import main as work
 
 ENDING = 3.0            # s a job's process is given after SIGTERM before SIGKILL
 
@@ -42,6 +42,8 @@ class Job:
 
     @property
     def fraction(self) -> float:
+        if self.status == "done":
+            return 1.0
         return min(1.0, self.done / self.total) if self.total else 0.0
 
 
@@ -66,7 +68,7 @@ class Jobs:
         job_id = secrets.token_hex(8)
         job = Job(job_id, kind, request, total=len(request.get("points", [])) or 0)
         receive, send = self._ctx.Pipe(duplex=False)
-        process = self._ctx.Process(target=worker.main, name=f"sewfmu-app-{kind}-{job_id}",
+        process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
                                     args=(kind, request, str(self.root / job_id), send))
         with self._lock:
             if self._closed:

@@ -45,11 +45,11 @@ def page(choices: list[str]) -> html.Div:
             html.Section(className="panel", **{"data-view": "plot"}, children=[
                 html.H2("recorded series"),
                 dcc.Dropdown(id="series", multi=True, placeholder="choose series to plot"),
-                dcc.Graph(id="plot", config={"responsive": True, "displaylogo": False},
+                dcc.Graph(id="plot", config={"displaylogo": False},
                           className="graph")]),
             html.Section(className="panel", **{"data-view": "animation"}, children=[
                 html.H2("the mechanism moving"),
-                dcc.Graph(id="mechanism", config={"responsive": True, "displaylogo": False},
+                dcc.Graph(id="mechanism", config={"displaylogo": False},
                           className="graph"),
                 html.Div(className="actions", children=[
                     html.Button("Play", id="play"),
@@ -151,5 +151,5 @@ def sweep_panel() -> html.Section:
         dcc.Store(id="sweep-job"), dcc.Store(id="sweep-rows"),
         dcc.Interval(id="sweep-poll", interval=POLL_MS * 2, disabled=True),
         html.Div(**{"data-view": "sweep"}, children=dcc.Graph(
-            id="sweep-plot", config={"responsive": True, "displaylogo": False},
+            id="sweep-plot", config={"displaylogo": False},
             className="graph"))])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import shutil
 import signal
+import socket
 import sys
 import tempfile
 import threading
@@ -13,12 +14,13 @@ from pathlib import Path
 
 import dash
 from flask import abort, send_file
-from werkzeug.serving import make_server
+from werkzeug.serving import WSGIRequestHandler, make_server
 
 import sewfmu
-from sewfmu.app import callbacks, layout
+from sewfmu.app.callbacks import register
 from sewfmu.app.files import FILES, result_file
 from sewfmu.app.jobs import Jobs
+from sewfmu.app.layout import page as page_layout
 from sewfmu.app.values import changed_values, command_line
 
 ASSETS = Path(__file__).resolve().parent / "assets"
@@ -72,8 +74,8 @@ class Page:
 def create(page: Page) -> dash.Dash:
     app = dash.Dash("sewfmu", title="sewfmu", assets_folder=str(ASSETS), update_title=None,
                     serve_locally=True)
-    app.layout = layout.page(list(page.choices))
-    callbacks.register(app, page)
+    app.layout = page_layout(list(page.choices))
+    register(app, page)
 
     @app.server.route("/runs/<run_id>/<name>")
     def result(run_id, name):
@@ -112,7 +114,9 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
     page = Page(choices, root, scheduler, workers)
     try:
         try:
-            server = make_server(host, port, create(page).server, threaded=True)
+            _free(host, port)
+            server = make_server(host, port, create(page).server, threaded=True,
+                                 request_handler=_Quiet)
         except OSError as err:
             raise PortTaken(f"{host}:{port}: cannot serve there ({err.strerror or err}); "
                             f"--port takes another") from None
@@ -142,6 +146,21 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
         page.jobs.shutdown()
         shutil.rmtree(root, ignore_errors=True)
     print("sewfmu app: stopped; every run's process ended", flush=True)
+
+
+def _free(host: str, port: int) -> None:
+    """Raise OSError if the port is taken (werkzeug would print two lines and exit)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        probe.bind((host, port))
+
+
+class _Quiet(WSGIRequestHandler):
+    """No line per request on the terminal: the URL line and errors only."""
+
+    def log_request(self, *args, **kwargs) -> None:
+        pass
 
 
 class PortTaken(sewfmu.Error):
