@@ -5,6 +5,7 @@ holds (dcc.Store, in the tab); nothing is kept per page on the server."""
 from __future__ import annotations
 
 import time
+from urllib.parse import unquote
 
 import dash
 import numpy as np
@@ -22,22 +23,19 @@ NOT = dash.no_update
 def register(app, page) -> None:
     """page: the app's state (choices, jobs, the results folder, the sweep's scheduler)."""
 
-    @app.callback(Output("scenario", "value"), Input("url", "search"))
-    def choose_from_address(search):
+    @app.callback(Output("scenario", "value"), Input("url", "search"), State("scenario", "value"))
+    def choose_from_address(search, current):
         wanted = dict(p.split("=", 1) for p in (search or "").lstrip("?").split("&") if "=" in p)
-        name = wanted.get("scenario")
-        return name if name in page.choices else NOT
+        name = unquote(wanted.get("scenario", ""))
+        # the same scenario again would draw its inputs anew, over what was typed meanwhile
+        return name if name in page.choices and name != current else NOT
 
     @app.callback(Output("values", "children"), Output("defaults", "data"),
                   Output("description", "children"), Output("sweep-param", "options"),
-                  Output("sweep-param2", "options"), Input("scenario", "value"))
+                  Output("sweep-param2", "options"), Input("scenario", "value"),
+                  prevent_initial_call=True)
     def show_values(label):
-        if label not in page.choices:
-            return [], {}, "", [], []
-        source = page.choices[label]
-        cells, defaults = value_inputs(source)
-        numeric = [n for n, v in defaults.items() if isinstance(value_of(v), (int, float))]
-        return cells, defaults, sewfmu.load(source).description, numeric, numeric
+        return values_of_choice(page, label)
 
     @app.callback(Output("job", "data"), Output("poll", "disabled"), Output("progress", "value"),
                   Output("status", "children"), Output("alert", "children"),
@@ -192,6 +190,17 @@ def register(app, page) -> None:
         figure = figure if figure in names else (names[0] if names else None)
         return sweep_figure(data["rows"], data["swept"], figure, data["units"]), \
             names, figure
+
+
+def values_of_choice(page, label: str) -> tuple:
+    """A scenario's inputs, their texts as it has them, its description, and the values a
+    sweep can take (the numbers)."""
+    if label not in page.choices:
+        return [], {}, "", [], []
+    source = page.choices[label]
+    cells, defaults = value_inputs(source)
+    numeric = [n for n, v in defaults.items() if isinstance(value_of(v), (int, float))]
+    return cells, defaults, sewfmu.load(source).description, numeric, numeric
 
 
 def _default_series(names: list[str]) -> list[str]:

@@ -14,7 +14,10 @@ TICK_MS = 250            # the animation's frame time when playing
 FRAME_DEG = 10           # the animation's frames: every 10° of the last revolution
 
 
-def page(choices: list[str]) -> html.Div:
+def page(choices: list[str], first: tuple) -> html.Div:
+    """The page, the first scenario's values in it (callbacks.values_of_choice), so that it
+    shows them without a round trip."""
+    cells, defaults, description, numeric, _ = first
     return html.Div(className="page", children=[
         dcc.Location(id="url", refresh=False),
         html.Header([html.H1("sewfmu"), html.Span("set a mechanism's values, run, watch it "
@@ -23,12 +26,12 @@ def page(choices: list[str]) -> html.Div:
             html.Label("scenario", htmlFor="scenario", className="label"),
             dcc.Dropdown(id="scenario", options=[{"label": c, "value": c} for c in choices],
                          value=choices[0] if choices else None, clearable=False),
-            html.Div(id="description", className="meaning"),
+            html.Div(description, id="description", className="meaning"),
             html.Details(open=True, children=[
                 html.Summary("values (a number in the unit shown, or with its unit: "
                              "\"955 rpm\")"),
-                html.Div(id="values", className="values")]),
-            dcc.Store(id="defaults"),
+                html.Div(cells, id="values", className="values")]),
+            dcc.Store(id="defaults", data=defaults),
             html.Div(className="actions", children=[
                 html.Button("Run", id="run", className="primary"),
                 html.Button("Cancel", id="cancel"),
@@ -63,7 +66,7 @@ def page(choices: list[str]) -> html.Div:
             html.P("tick runs to overlay them on the plots; the last ticked one moves",
                    className="meaning"),
             html.Div(id="table", className="table")]),
-        sweep_panel(),
+        sweep_panel(numeric),
     ])
 
 
@@ -123,10 +126,10 @@ def _cell(run: dict, name: str) -> str:
     return "" if value is None else (f"{value:.4g}" if isinstance(value, float) else str(value))
 
 
-def sweep_panel() -> html.Section:
+def sweep_panel(numeric: list[str]) -> html.Section:
     def param(n: str, optional: bool):
         return html.Div(className="sweep-row", children=[
-            dcc.Dropdown(id=f"sweep-param{n}", placeholder="parameter" + (" (optional)"
+            dcc.Dropdown(id=f"sweep-param{n}", options=numeric, placeholder="parameter" + (" (optional)"
                                                                            if optional else ""),
                          className="sweep-param"),
             dcc.Input(id=f"sweep-from{n}", name=f"sweep.from{n}", type="text",

@@ -17,7 +17,7 @@ from flask import abort, send_file
 from werkzeug.serving import WSGIRequestHandler, make_server
 
 import sewfmu
-from sewfmu.app.callbacks import register
+from sewfmu.app.callbacks import register, values_of_choice
 from sewfmu.app.files import FILES, result_file
 from sewfmu.app.jobs import Jobs
 from sewfmu.app.layout import page as page_layout
@@ -74,7 +74,8 @@ class Page:
 def create(page: Page) -> dash.Dash:
     app = dash.Dash("sewfmu", title="sewfmu", assets_folder=str(ASSETS), update_title=None,
                     serve_locally=True)
-    app.layout = page_layout(list(page.choices))
+    first = next(iter(page.choices), None)
+    app.layout = page_layout(list(page.choices), values_of_choice(page, first))
     register(app, page)
 
     @app.server.route("/runs/<run_id>/<name>")
@@ -96,12 +97,13 @@ _MIME = {".csv": "text/csv", ".json": "application/json", ".html": "text/html",
 
 
 def choices_of(named: list[str]) -> dict[str, str]:
-    """The scenarios on offer: the files named (each checked now), then the catalogue."""
+    """The scenarios on offer: the files named (each checked now), then the catalogue, the
+    default scenario (punch_drive, as `sewfmu run`'s README example) first."""
     chosen = {}
     for item in named:
         sewfmu.load(item)                      # a bad file is one line now, not on the page
         chosen[item] = item
-    for name in sewfmu.scenarios():
+    for name in sorted(sewfmu.scenarios(), key=lambda n: n != "punch_drive"):
         chosen.setdefault(name, name)
     return chosen
 
