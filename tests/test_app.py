@@ -237,3 +237,23 @@ def test_sewfmu_app_is_callable_as_the_package_and_as_the_name():
         sewfmu.app(port=70000)
     with pytest.raises(sewfmu.Error, match="port"):
         package(port="8050")
+
+
+def test_another_host_is_warned_of_and_sigterm_ends_the_server_with_0(tmp_path):
+    import os
+    import signal
+
+    server = subprocess.Popen([sys.executable, "-m", "sewfmu", "app", "--host", "127.0.0.2",
+                               "--port", str(_free_port())], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True,
+                              env={**os.environ, "TMPDIR": str(tmp_path)})
+    try:
+        line = server.stdout.readline()
+        assert line.startswith("sewfmu app: http://127.0.0.2:"), line
+        assert list(tmp_path.glob("sewfmu_app_*"))
+    finally:
+        server.send_signal(signal.SIGTERM)
+        code = server.wait(60)
+    warning = server.stderr.read().strip().splitlines()
+    assert code == 0 and len(warning) == 1 and "anyone who reaches" in warning[0]
+    assert not list(tmp_path.glob("sewfmu_app_*"))

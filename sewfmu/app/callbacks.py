@@ -184,7 +184,7 @@ def register(app, page) -> None:
                   Input("sweep-figure", "value"))
     def sweep_plot(data, figure):
         data = data or {"rows": [], "swept": [], "units": {}}
-        skip = {"index", "key", "status", "error", "wall_time_s", *data["swept"]}
+        skip = {"index", "key", "status", "error", "wall_time_s", "stop_time", *data["swept"]}
         names = list(dict.fromkeys(k for r in data["rows"] for k, v in r.items()
                                    if k not in skip and isinstance(v, (int, float))))
         figure = figure if figure in names else (names[0] if names else None)
@@ -203,10 +203,17 @@ def values_of_choice(page, label: str) -> tuple:
     return cells, defaults, sewfmu.load(source).description, numeric, numeric
 
 
+# the outputs a mechanism's pages plot first: the punch's height and force, the feed dog's and
+# the eye's paths, the table and the guide's tip
+FIRST = ("y", "F2", "M_x", "M_y", "E_z", "E_x", "x", "U2")
+
+
 def _default_series(names: list[str]) -> list[str]:
-    """Two series to start with: the first recorded outputs past the shaft's."""
+    """Two series to start with: the mechanism's own, else the first past the shaft's."""
+    known = sorted((n for n in names if n.rpartition(".")[2] in FIRST),
+                   key=lambda n: FIRST.index(n.rpartition(".")[2]))
     rest = [n for n in names if not n.startswith("shaft.")]
-    return (rest or names)[:2]
+    return (known or rest or names)[:2]
 
 
 def _range(page, label: str, name: str, lo, hi, n) -> list[float]:
