@@ -82,9 +82,9 @@ def test_a_run_s_own_files_are_served(tmp_path):
     assert files.present(tmp_path, "0123456789abcdef") == ["results.csv"]
 
 
-def _request(changed, report=False):
+def _request(changed):
     return {"source": "punch_drive", "scenario": "punch_drive", "changed": changed,
-            "toml": sewfmu.show("punch_drive"), "report": report, "command": ""}
+            "toml": sewfmu.show("punch_drive"), "command": ""}
 
 
 def _wait(jobs, *ids, timeout=120):
@@ -257,3 +257,19 @@ def test_another_host_is_warned_of_and_sigterm_ends_the_server_with_0(tmp_path):
     warning = server.stderr.read().strip().splitlines()
     assert code == 0 and len(warning) == 1 and "anyone who reaches" in warning[0]
     assert not list(tmp_path.glob("sewfmu_app_*"))
+
+
+@pytest.mark.slow
+def test_report_html_is_made_into_the_run_s_folder_when_asked_for(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        run = jobs.start("run", _request(SHORT))
+        _wait(jobs, run)
+        assert "report.html" not in files.present(tmp_path, run)
+        report = jobs.start("report", jobs.get(run).request, folder=run)
+        _wait(jobs, report, timeout=300)
+        assert jobs.get(report).status == "done", jobs.get(report).error
+        assert "report.html" in files.present(tmp_path, run)
+        assert sorted(p.name for p in tmp_path.iterdir()) == [run]      # nothing else left
+    finally:
+        jobs.shutdown()

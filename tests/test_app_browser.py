@@ -231,8 +231,9 @@ def test_nothing_scrolls_sideways(browser, server, width, name):
     browser.get(f"{server}?scenario=punch_drive")
     type_value(browser, "experiment.revolutions", SHORT)
     run_and_wait(browser, 0)
-    type_value(browser, "shaft.omega0", "200")
-    run_and_wait(browser, 1)
+    if name == "desktop":               # two runs overlaid in the picture
+        type_value(browser, "shaft.omega0", "200")
+        run_and_wait(browser, 1)
     wide = browser.execute_script("return [document.documentElement.scrollWidth, "
                                   "window.innerWidth]")
     assert wide[0] <= wide[1], wide

@@ -90,8 +90,8 @@ def register(app, page) -> None:
         if not runs:
             return html.P("no runs yet", className="meaning")
         ticked = set(ticked or []) | {runs[-1]["key"]}
-        for run in runs:      # report.html comes after the figures: its link when it is there
-            run["files"] = present(page.root, run["id"])
+        for run in runs:      # report.html is made when first asked for
+            run["files"] = list(dict.fromkeys([*present(page.root, run["id"]), "report.html"]))
         return runs_table(runs, list(ticked))
 
     @app.callback(Output("ticked", "data"), Input({"type": "tick", "key": ALL}, "value"),

@@ -35,7 +35,7 @@ class Job:
     result: dict | None = None
     error: str | None = None
     points: list = field(default_factory=list)
-    files: bool = False             # report.html written (runs)
+    report: str | None = None       # the job making this run's report.html, once asked
     started: float = field(default_factory=time.monotonic)
     finished: float | None = None
     ended: threading.Event = field(default_factory=threading.Event)   # its process is gone
@@ -64,12 +64,14 @@ class Jobs:
         self._ctx = _context()
         self._closed = False
 
-    def start(self, kind: str, request: dict) -> str:
+    def start(self, kind: str, request: dict, folder: str | None = None) -> str:
+        """A new job; its files under root/<its id>, or root/<folder> (a run's report)."""
         job_id = secrets.token_hex(8)
         job = Job(job_id, kind, request, total=len(request.get("points", [])) or 0)
         receive, send = self._ctx.Pipe(duplex=False)
         process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
-                                    args=(kind, request, str(self.root / job_id), send))
+                                    args=(kind, request, str(self.root / (folder or job_id)),
+                                          send))
         with self._lock:
             if self._closed:
                 raise RuntimeError("the app is ending")
@@ -99,8 +101,6 @@ class Jobs:
                 job.done = len(job.points)
             elif what == "done":
                 job.result, job.status, job.finished = body[0], "done", time.monotonic()
-            elif what == "files":
-                job.files = True
             elif what == "error":
                 if job.status != "cancelled":
                     job.error, job.status = body[0], "error"

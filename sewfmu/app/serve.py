@@ -3,6 +3,7 @@ run id and fixed name; it serves until Ctrl-C or SIGTERM, then ends every job's 
 removes the one temporary folder all runs were written under."""
 from __future__ import annotations
 
+import html
 import shutil
 import signal
 import socket
@@ -36,7 +37,7 @@ class Page:
         self.jobs = Jobs(root)
         self.scheduler = scheduler
         self.workers = workers
-        self._count = 0
+        self._lock = threading.Lock()
 
     def check(self, label: str, typed: dict, defaults: dict) -> dict:
         if label not in self.choices:
@@ -50,7 +51,7 @@ class Page:
             toml = Path(source).read_text(encoding="utf-8-sig") \
                 if source.lower().endswith(".toml") else sewfmu.show(source)
         return {"source": source, "scenario": label, "changed": changed, "toml": toml,
-                "report": True, "command": command_line(label, changed)}
+                "command": command_line(label, changed)}
 
     def entries(self, job, runs: list) -> list[dict]:
         """The rows a finished run adds to its tab's table: one per variant ([compare])."""
@@ -63,6 +64,17 @@ class Page:
                         "figures": variant["figures"], "units": variant["units"],
                         "command": job.request["command"], "files": []})
         return out
+
+    def report(self, job) -> str:
+        """A page that waits for report.html, which is made (once) when first asked for."""
+        with self._lock:
+            maker = self.jobs.get(job.report)
+            if maker is None or maker.status in ("error", "cancelled"):
+                if maker is not None and maker.status == "error":
+                    return f"<p>report.html could not be made: {html.escape(maker.error)}</p>"
+                job.report = self.jobs.start("report", job.request, folder=job.id)
+        return ("<meta http-equiv='refresh' content='2'><p>report.html is being made (the run "
+                "again, with its plots and animation); this page reloads until it is there</p>")
 
     def variant(self, entry: dict) -> dict:
         job = self.jobs.get(entry.get("id"))
@@ -83,10 +95,10 @@ def create(page: Page) -> dash.Dash:
         path = result_file(page.root, run_id, name)
         if path is None:
             job = page.jobs.get(run_id)
-            if name == "report.html" and job is not None and job.status == "done":
-                return ("<meta http-equiv='refresh' content='2'><p>report.html is being "
-                        "made; this page reloads until it is there</p>")
-            abort(404)
+            if name != "report.html" or job is None or job.kind != "run" or \
+                    job.status != "done":
+                abort(404)
+            return page.report(job)
         return send_file(path, mimetype=_MIME.get(path.suffix, "text/plain"),
                          as_attachment=name != "report.html", download_name=name)
     return app

@@ -1,7 +1,7 @@
 """What a job's process does: one run or one sweep through the public API (sewfmu.run,
 sewfmu.sweep), telling the page how far it is through a pipe. A run's files go under its own
 folder, which appears whole (written beside it, then renamed) or not at all; report.html, which
-takes longer than the run, follows when it is made.
+takes longer than the run, is made when it is first asked for.
 
 The process leads a group of its own (a sweep's worker processes join it), so that Cancel ends
 them all; it ends when the app does (the kernel's parent-death signal, and a pipe that breaks)."""
@@ -36,7 +36,7 @@ def main(kind: str, job: dict, folder: str, conn) -> None:
     except (OSError, AttributeError):
         pass
     try:
-        (_run if kind == "run" else _sweep)(job, Path(folder), conn)
+        {"run": _run, "sweep": _sweep, "report": _report}[kind](job, Path(folder), conn)
     except sewfmu.Error as err:
         conn.send(("error", " ".join(str(err).split())))
     except Exception as err:        # one line on the page, as the command line would say it
@@ -69,12 +69,17 @@ def _run(job: dict, folder: Path, conn) -> None:
     os.replace(part, folder)
     conn.send(("done", {"variants": [_variant(label, r) for label, r in
                                      (run.runs.items() if run.runs else [("", run)])]}))
-    if job.get("report"):
-        made = folder.with_name(folder.name + ".report")
-        sewfmu.run(job["source"], set=values, out=made, report=True)
-        os.replace(made / "report.html", folder / "report.html")
-        shutil.rmtree(made, ignore_errors=True)
-        conn.send(("files", None))
+
+
+def _report(job: dict, folder: Path, conn) -> None:
+    """report.html of a run, when it is first asked for: the run again with its pictures (the
+    public API writes a report with a run), into the run's folder once it is whole."""
+    values = {name: value_of(text) for name, text in job["changed"].items()}
+    made = folder.with_name(folder.name + ".report")
+    sewfmu.run(job["source"], set=values, out=made, report=True)
+    os.replace(made / "report.html", folder / "report.html")
+    shutil.rmtree(made, ignore_errors=True)
+    conn.send(("done", {}))
 
 
 def _variant(label: str, run) -> dict:
