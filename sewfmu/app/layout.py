@@ -9,7 +9,7 @@ from dash import dcc, html
 
 from sewfmu.app.values import inputs_of
 
-POLL_MS = 300            # how often a running job's progress is asked for
+POLL_MS = 150            # how often a running job's progress is asked for
 TICK_MS = 250            # the animation's frame time when playing
 FRAME_DEG = 10           # the animation's frames: every 10° of the last revolution
 

@@ -15,8 +15,13 @@ import signal
 import time
 from pathlib import Path
 
-import fmpy  # noqa: F401  loaded in the fork server once, not in every run
+# what a run loads on its first use, loaded once in the fork server rather than in every run:
+# fmpy's reading of a modelDescription, and the pythonfmu FMUs' slave classes run in-process
+import fmpy.validation  # noqa: F401
+import lxml.etree  # noqa: F401
 import numpy as np
+import pythonfmu.fmi2slave  # noqa: F401
+import pythonfmu3.fmi3slave  # noqa: F401
 
 import sewfmu
 from sewfmu.app.values import command_line, scenario_toml, value_of
