@@ -18,6 +18,7 @@ from sewfmu.app.layout import FRAME_DEG, figures, runs_table, value_inputs
 from sewfmu.app.values import value_of
 
 NOT = dash.no_update
+MAX_POINTS = 400          # a sweep's points from the page (a larger one: `sewfmu sweep`)
 
 
 def register(app, page) -> None:
@@ -154,6 +155,8 @@ def register(app, page) -> None:
                     if p2 == p1:
                         raise sewfmu.ScenarioError(f"sweep: {p1} is chosen twice")
                     grid[p2] = _range(page, label, p2, lo2, hi2, n2)
+                if len(grid[p1]) * len(grid.get(p2, [0])) > MAX_POINTS:
+                    raise sewfmu.ScenarioError(f"sweep: at most {MAX_POINTS} points in all")
                 request = {**page.request(label, changed), "grid": grid,
                            "scheduler": page.scheduler, "workers": page.workers,
                            "points": [0] * int(np.prod([len(v) for v in grid.values()]))}
