@@ -114,7 +114,8 @@ def register(app, page) -> None:
             return mechanism_figure(None, 0)
         run = shown[-1]
         return mechanism_figure(page.variant(run)["mechanism"],
-                                        round((angle or 0) / FRAME_DEG), run["label"])
+                                        round((angle or 0) / FRAME_DEG), run["label"],
+                                        empty="no drawing of this mechanism")
 
     @app.callback(Output("tick", "disabled"), Output("play", "children"),
                   Input("play", "n_clicks"), State("tick", "disabled"),

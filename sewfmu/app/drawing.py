@@ -15,6 +15,8 @@ def series_figure(shown: list[tuple[str, dict]], columns: list[str], cursor_deg:
     """One panel per chosen column, each run (label, variant) a line in it, against the crank
     angle of the last revolution."""
     columns = columns or []
+    if not shown:
+        return _empty(go.Figure(), "run the scenario, or tick runs,<br>to plot what they recorded")
     fig = make_subplots(rows=max(1, len(columns)), cols=1, shared_xaxes=True,
                         vertical_spacing=0.06)
     for row, column in enumerate(columns, start=1):
@@ -39,13 +41,12 @@ def series_figure(shown: list[tuple[str, dict]], columns: list[str], cursor_deg:
     return fig
 
 
-def mechanism_figure(drawing: dict | None, frame: int, label: str = ""):
+def mechanism_figure(drawing: dict | None, frame: int, label: str = "",
+                     empty: str = "run the scenario<br>to see its mechanism move"):
     """The mechanism at one frame: its bars, its pivots, the tracked point in red and its path."""
     fig = go.Figure()
     if not drawing:
-        fig.update_layout(height=260, margin=MARGIN,
-                          title=dict(text="no drawing of this mechanism", font=dict(size=12)))
-        return fig
+        return _empty(fig, empty)
     frame = max(0, min(frame, len(drawing["crank_deg"]) - 1))
     at = {name: xy[frame] for name, xy in drawing["points"].items()}
     tracked = drawing["tracked"]
@@ -76,6 +77,9 @@ def mechanism_figure(drawing: dict | None, frame: int, label: str = ""):
 def sweep_figure(rows: list[dict], swept: list[str], figure: str | None, units: dict):
     """A key figure against one swept parameter (a line), or two (coloured points)."""
     fig = go.Figure()
+    if not rows:
+        return _empty(fig, "choose a value and its range, then Run sweep:<br>the points "
+                           "appear here as they finish")
     ok = [r for r in rows if r.get("status") == "ok" and isinstance(r.get(figure), (int, float))]
     unit = units.get(figure, "")
     name = f"{figure} [{unit}]" if unit else (figure or "")
@@ -94,6 +98,15 @@ def sweep_figure(rows: list[dict], swept: list[str], figure: str | None, units: 
     if swept:
         fig.update_xaxes(title_text=_axis(swept[0], units))
     fig.update_layout(height=360, margin=MARGIN, uirevision="sweep")
+    return fig
+
+
+def _empty(fig, text: str):
+    """A figure with nothing to draw yet: what to do instead of empty axes."""
+    fig.update_layout(height=200, margin=MARGIN, xaxis=dict(visible=False),
+                      yaxis=dict(visible=False), plot_bgcolor="white",
+                      annotations=[dict(text=text, showarrow=False, x=0.5, y=0.5, xref="paper",
+                                        yref="paper", font=dict(size=13, color="#666"))])
     return fig
 
 
