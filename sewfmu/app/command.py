@@ -10,7 +10,8 @@ def add_command(sub) -> None:
     p = sub.add_parser("app", help="the page: set, run, watch and compare a mechanism in the "
                                    "browser (docs/app.md)")
     p.add_argument("scenario", nargs="*", metavar="SCENARIO_OR_FILE",
-                   help="scenario files to offer beside the catalogue")
+                   help="scenario files (TOML, SSP) to offer beside the catalogue, or catalogue "
+                        "names; the first is the one the page opens on")
     p.add_argument("--port", type=_port, default=8050, help="the port (default 8050)")
     p.add_argument("--host", default="127.0.0.1",
                    help="the address to serve on (default 127.0.0.1: this machine only)")
