@@ -317,3 +317,32 @@ def test_sigterm_ends_the_server_and_every_run(browser, tmp_path):
             for pid in _session(process.pid) if pid != process.pid}
     assert not left, left
     assert not list(tmp_path.glob("sewfmu_app_*")), "the results folder was left behind"
+
+
+def test_the_server_serves_a_run_s_own_files_and_nothing_else(page, server):
+    import urllib.error
+    import urllib.request
+
+    type_value(page, "experiment.revolutions", SHORT)
+    run_and_wait(page, 0)
+    links = {a.text: a.get_attribute("href") for a in
+             page.find_elements(By.CSS_SELECTOR, "tr[data-run] a")}
+    with urllib.request.urlopen(links["command.txt"]) as answer:
+        assert answer.read().decode().strip() == "sewfmu run punch_drive --set " \
+                                                 "experiment.revolutions=2"
+    with urllib.request.urlopen(links["scenario.toml"]) as answer:
+        assert "revolutions = 2" in answer.read().decode()
+    with urllib.request.urlopen(links["report.html"]) as answer:      # made when asked for
+        assert "report.html" in answer.read().decode()
+    run_id = links["results.csv"].rstrip("/").split("/")[-2]
+    for path in (f"runs/{run_id}/punch_drive.png", f"runs/{run_id}/%2e%2e",
+                 "runs/0123456789abcdef/results.csv", f"runs/{run_id[:-1]}/results.csv"):
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(server + path)
+        assert refused.value.code == 404, path
+    # a path with a slash in a part (/runs/../.., ..%2f) is no file's route: Dash's page itself
+    for path in ("runs/../../etc/passwd", f"runs/{run_id}/..%2fsummary.json",
+                 f"runs/{run_id}/results.csv/x"):
+        with urllib.request.urlopen(server + path) as answer:
+            body = answer.read().decode()
+        assert "root:" not in body and "F2_peak" not in body and "_dash-" in body, path
