@@ -19,7 +19,7 @@ from werkzeug.serving import WSGIRequestHandler, make_server
 
 import sewfmu
 from sewfmu.app.callbacks import register, values_of_choice
-from sewfmu.app.files import FILES, result_file
+from sewfmu.app.files import result_file
 from sewfmu.app.jobs import Jobs
 from sewfmu.app.layout import page as page_layout
 from sewfmu.app.values import changed_values, command_line
@@ -180,5 +180,3 @@ class _Quiet(WSGIRequestHandler):
 class PortTaken(sewfmu.Error):
     """The port asked for is taken (or not ours to take)."""
 
-
-__all__ = ["serve", "FILES"]
