@@ -3,7 +3,7 @@ the figures sewfmu.run gives with that value; a value with its unit; a bad value
 one line and the next good run runs; two tabs at once keep their own runs; Cancel; a phone's
 width; the sweep panel; SIGTERM ends the server and every run's process. The server runs as a
 subprocess on a free port. Slow: left out of the fast loop. The screenshots in docs/app.md are
-taken here."""
+taken here (SEWFMU_APP_PICTURES=docs writes them into docs/)."""
 import os
 import re
 import shutil
@@ -226,7 +226,7 @@ def test_cancel_ends_the_run(page):
 
 
 @pytest.mark.parametrize("width, name", [(390, "phone"), (1280, "desktop")])
-def test_nothing_scrolls_sideways(browser, server, width, name):
+def test_nothing_scrolls_sideways(browser, server, width, name, tmp_path):
     browser.set_window_size(width, 1000 if width > 500 else 844)
     browser.get(f"{server}?scenario=punch_drive")
     type_value(browser, "experiment.revolutions", SHORT)
@@ -246,7 +246,9 @@ def test_nothing_scrolls_sideways(browser, server, width, name):
         browser.set_window_size(width, min(high + 140, 2000))
     browser.execute_script("document.getElementById('status').scrollIntoView()")
     time.sleep(1.0)                     # the plots redrawn to the new size before the picture
-    browser.save_screenshot(str(DOCS / f"app_{name}.png"))
+    # SEWFMU_APP_PICTURES=docs: the pictures of docs/app.md, taken anew
+    folder = DOCS if os.environ.get("SEWFMU_APP_PICTURES") == "docs" else tmp_path
+    assert browser.save_screenshot(str(folder / f"app_{name}.png"))
 
 
 def choose(driver, dropdown_id, text):
