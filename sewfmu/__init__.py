@@ -15,7 +15,7 @@ __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "p
            "scenarios",
            "Run", "Sweep", "Scenario", "Instance", "Connection", "Error", "ScenarioError",
            "CosimError", "OutputError",
-           "Diverged", "MissingExtra", "optimize", "fit", "sensitivity"]
+           "Diverged", "MissingExtra", "optimize", "fit", "sensitivity", "app"]
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
@@ -31,7 +31,8 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
          "Diverged": "sewfmu.scenarios.cosim.divergence",
          # the design studies (docs/design.md)
-         **{name: "sewfmu.api" for name in ("optimize", "fit", "sensitivity")}}
+         **{name: "sewfmu.design_api" for name in ("optimize", "fit", "sensitivity")},
+         "app": "sewfmu.app"}             # the page (docs/app.md)
 
 
 def scenarios() -> list[str]:

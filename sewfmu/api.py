@@ -17,7 +17,7 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.analyses import figure_units, figures_of
@@ -113,6 +113,7 @@ class Run:
     runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
     shaft: str | None = None                  # the MainShaft whose turns revolution() counts
     study: dict | None = None                 # a study scenario's whole result
+    scenario: Scenario | None = field(default=None, repr=False)    # as run, values applied
 
     def _recorded(self, what: str):
         if self.series is None:
@@ -141,6 +142,24 @@ class Run:
         return revolution(self._recorded("revolution()"), f"{self.shaft or 'shaft'}.phi", k,
                           self.name)
 
+    def mechanism(self, frames: int = 36) -> dict:
+        """The mechanism at `frames` equally spaced crank angles of the last revolution, as
+        numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
+        [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
+        point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
+        from sewfmu.scenarios.animations import linkage  # loaded on first use (start-up time)
+        from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
+
+        if self.scenario is None or self.series is None:
+            raise ScenarioError(f"{self.name}: no recorded run to draw (a [compare] run: take "
+                                f"one of run.runs)")
+        columns = {n: self.series[n] for n in self.series.dtype.names if n != "time"}
+        result = RunResult(self.scenario, self.series["time"], columns, 0.0)
+        try:
+            return linkage(result, frames)
+        except Error as err:
+            raise ScenarioError(f"{self.name}: {err}") from None
+
     def __repr__(self) -> str:
         if self.runs:
             return f"<sewfmu.Run {self.name}: {len(self.runs)} runs {list(self.runs)}>"
@@ -155,7 +174,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     """Run a scenario; with `out`, write what `sewfmu run --out` writes (plot, animate and report
     as its options). A scenario with [compare] gives a Run whose `runs` holds one Run per
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
-    a progress bar on the terminal."""
+    a progress bar on the terminal; a function instead, `progress(done, total)`, hears of the
+    communication steps as they are done (a page's progress bar)."""
     from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_outputs  # loaded on first use (start-up time)
@@ -170,9 +190,10 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
     if sc.study:
         return _study_run(sc, out, plot, animate, report)
-    bar = TerminalProgress(sc.name) if progress else None
+    bar = TerminalProgress(sc.name) if progress is True else None
+    told = (lambda label, done, total: progress(done, total)) if callable(progress) else bar
     try:
-        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, bar)
+        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, told)
     finally:
         if bar is not None:
             bar.close()
@@ -220,7 +241,7 @@ def _run_of(name: str, result, summary: dict, out: Path | None, shaft: str | Non
         series[n] = result.columns[n]
     units = {"time": "s", **{n: result.units.get(n, "") for n in names},
              **summary.get("units", {})}
-    return Run(name, summary, series, units, out, shaft=shaft)
+    return Run(name, summary, series, units, out, shaft=shaft, scenario=result.scenario)
 
 
 @dataclass
@@ -279,11 +300,13 @@ class SweepFailed(ScenarioError):
 def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
-          report: bool = False, progress: bool = False, results: bool = False) -> Sweep:
+          report: bool = False, progress: bool = False, results: bool = False,
+          on_point: Callable[[dict], None] | None = None) -> Sweep:
     """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
     writes (and an interrupted sweep into the same folder resumes); `results` keeps each point's
-    results.csv there. A sweep whose every point failed is a ScenarioError."""
+    results.csv there. `on_point(row)` hears of each point as it finishes (its row as in
+    `rows`, in the order they finish). A sweep whose every point failed is a ScenarioError."""
     from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
         points_of,
         run_sweep,
@@ -310,7 +333,8 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         folder = Path(out) if out is not None else Path(scratch)
         try:
             rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
-                             keep_results=results and out is not None, progress=progress)
+                             keep_results=results and out is not None, progress=progress,
+                             on_point=on_point)
         except OSError as err:
             raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
                 from None
@@ -423,78 +447,3 @@ def _frame(series, index: str):
 
 def _short(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
-
-
-# --- design studies (scenarios/design/, docs/design.md) ---------------------------------------
-def _design_scenario(scenario, set):
-    """The scenario, its FMU files (built where missing) and their modelDescriptions by
-    instance: what a design study checks its ranges and data against before anything runs."""
-    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
-
-    sc = load(scenario, set)
-    paths = fmus_for(sc)
-    return sc, paths, {n: extracted_fmu(Path(paths[i.fmu]))[1] for n, i in sc.instances.items()}
-
-
-def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
-             minimize: str | None = None, maximize: str | None = None,
-             target: Mapping[str, Any] | None = None, constraints: list | None = None,
-             set: Mapping[str, Any] | None = None, method: str = "local",
-             workers: int | None = None, out: str | Path | None = None, plot: bool = False,
-             max_evaluations: int | None = None, progress: bool = False):
-    """`sewfmu optimize`: vary {"inst.param": (lo, hi) or "LO..HI unit"}, one of
-    minimize=FIGURE, maximize=FIGURE, target={FIGURE: value}; constraints ["FIGURE>=VALUE unit"].
-    An Optimum (.best, .figures, .evaluations, .converged); with `out` evaluations.csv (a rerun
-    there resumes), optimize.json, with `plot` convergence.png. `progress` shows a bar on the
-    terminal."""
-    from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
-
-    out = _folder(out, "out")
-    sc, paths, described = _design_scenario(scenario, set)
-    known = space.figures_of_scenario(sc)
-    goal = space.goal_of(known, minimize, maximize, target)
-    limits = space.constraints_of(known, constraints)
-    variables = space.variables(sc, vary, described)
-    if plot and out is None:
-        raise ScenarioError("plot is a file: give out= a folder for it")
-    return design.optimize(sc, paths, variables, goal, limits, method, workers, out, plot,
-                           max_evaluations, progress)
-
-
-def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
-        set: Mapping[str, Any] | None = None, out: str | Path | None = None,
-        max_evaluations: int | None = None, progress: bool = False):
-    """`sewfmu fit`: data a CSV file (a `time` column, columns named like recorded outputs) or a
-    structured array; free {"inst.param": (lo, hi)}. A Fit (.estimates, .standard_errors,
-    .residuals); with `out` fit.json, fit.png and fit_evaluations.jsonl (a rerun there
-    resumes). `progress` shows a bar on the terminal."""
-    from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
-
-    out = _folder(out, "out")
-    sc, paths, described = _design_scenario(scenario, set)
-    measured = design.read_data(data)
-    ends = {"experiment.stop_time", "experiment.revolutions"}
-    sc = design.check_data(measured, sc, described, keep_end=bool(ends & {*(set or {})}))
-    free = space.variables(sc, free, described, option="--free")
-    return design.fit(sc, paths, free, measured, out, True, max_evaluations, progress)
-
-
-def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],
-                *, set: Mapping[str, Any] | None = None, method: str = "sobol",
-                samples: int | None = None, workers: int | None = None,
-                out: str | Path | None = None, progress: bool = False):
-    """`sewfmu sensitivity`: SALib's Sobol or Morris indices of key figures over parameter
-    ranges, the samples run as a sweep (resumable into `out`). A Sensitivity whose `table`
-    ranks the parameters for each figure."""
-    from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
-
-    out = _folder(out, "out")
-    sc, _, described = _design_scenario(scenario, set)
-    named = space.figures_named(space.figures_of_scenario(sc), figures)
-    variables = space.variables(sc, vary, described)
-    return design.sensitivity(sc, variables, named, space.figures_of_scenario(sc), method,
-                              samples, workers, out, progress)

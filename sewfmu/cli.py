@@ -382,10 +382,13 @@ def _positive_number(text: str) -> float:
 
 
 def _design_commands(sub) -> None:
-    """optimize, fit, sensitivity (sewfmu/design_cli.py)."""
+    """optimize, fit, sensitivity (sewfmu/design_cli.py); app, the page (sewfmu/app/command.py)."""
     from sewfmu.design_cli import add_commands  # a module of their own: this one's size
 
     add_commands(sub)
+    from sewfmu.app.command import add_command  # the page's command: its own package
+
+    add_command(sub)
 
 
 if __name__ == "__main__":

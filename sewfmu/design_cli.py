@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from sewfmu import api
+from sewfmu import design_api as api
 from sewfmu.console import whole_number
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 

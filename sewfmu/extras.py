@@ -14,7 +14,7 @@ from sewfmu.errors import Error
 # the optional packages and the extra of pyproject.toml that installs each
 EXTRAS = {"distributed": "dask", "dask": "dask", "libcosimpy": "interop", "ecospy": "interop",
           "pyssp_standard": "interop", "fmu_manipulation_toolbox": "interop", "tbb": "interop",
-          "pandas": "pandas", "SALib": "design"}
+          "pandas": "pandas", "SALib": "design", "dash": "app", "plotly": "app"}
 
 
 class MissingExtra(Error, ModuleNotFoundError):

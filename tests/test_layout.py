@@ -106,7 +106,7 @@ FORBIDDEN = {
     # design studies: over runs; nothing but the front doors imports them (below)
     "sewfmu.scenarios.design": ("sewfmu.scenarios.interop", "sewfmu.scenarios.references",
                                 "sewfmu.scenarios.fmu_build", "sewfmu.scenarios.animations"),
-    "sewfmu.scenarios": ("sewfmu.api", "sewfmu.cli", "sewfmu.design_cli"),
+    "sewfmu.scenarios": ("sewfmu.api", "sewfmu.design_api", "sewfmu.cli", "sewfmu.design_cli"),
 }
 
 
@@ -124,10 +124,24 @@ def test_each_wing_imports_only_what_lies_below_it():
 
 def test_nothing_but_the_front_doors_imports_the_design_studies():
     _, edges = _graph()
-    doors = ("sewfmu.api", "sewfmu.cli", "sewfmu.design_cli")
+    doors = ("sewfmu.api", "sewfmu.design_api", "sewfmu.cli", "sewfmu.design_cli")
     broken = sorted(f"{source} imports {target}" for source, targets in edges.items()
                     if not _under(source, "sewfmu.scenarios.design") and source not in doors
                     for target in targets if _under(target, "sewfmu.scenarios.design"))
+    assert not broken, broken
+
+
+def test_the_page_is_a_client_of_the_public_api():
+    """sewfmu.app (docs/app.md) imports sewfmu and its public names, nothing of the wings; and
+    nothing inside imports the page."""
+    _, edges = _graph()
+    broken = sorted(f"{source} imports {target}" for source, targets in edges.items()
+                    if _under(source, "sewfmu.app")
+                    for target in targets if _under(target, "sewfmu.scenarios")
+                    or _under(target, "sewfmu.components"))
+    broken += sorted(f"{source} imports {target}" for source, targets in edges.items()
+                     if _under(source, "sewfmu.scenarios") or _under(source, "sewfmu.components")
+                     for target in targets if _under(target, "sewfmu.app"))
     assert not broken, broken
 
 

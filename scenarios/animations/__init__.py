@@ -126,3 +126,25 @@ def angle_label(result, i: int) -> str:
     phi = analyses.column(result, "shaft", "phi")
     within = math.degrees(phi[i] - analyses.whole_revolution(float(phi[-1]))[0]) % 360.0
     return f"φ = {within:5.1f}°   t = {result.time[i]:.4f} s"
+
+
+def linkage(result, frames: int = FRAMES) -> dict:
+    """The mechanism's drawing as numbers, for a page that draws it itself: at `frames` equally
+    spaced crank angles of the last revolution, every point (mm) and the chains of bars between
+    them; the recorded point every animation marks is `tracked`."""
+    kind = result.scenario.analysis
+    drawing = analyses.mechanism(kind).animation if kind else None
+    if drawing is None:
+        raise analyses.RoleError(f"no drawing of the {kind!r} analysis's mechanism")
+    scene = importlib.import_module(f"{__name__}.{drawing}").Scene(result)
+    phi = analyses.column(result, "shaft", "phi")
+    samples = frame_samples(phi, frames)
+    start, _ = analyses.whole_revolution(float(phi[-1]))
+    at = [scene.points(i) for i in samples]
+    return {"samples": samples,
+            "crank_deg": [math.degrees(float(phi[i]) - start) % 360.0 for i in samples],
+            "time": [float(result.time[i]) for i in samples],
+            "points": {name: [tuple(map(float, p[name])) for p in at] for name in at[0]},
+            "chains": [list(c) for c in scene.chains()], "tracked": scene.tracked,
+            "xlim": tuple(map(float, scene.xlim)), "ylim": tuple(map(float, scene.ylim)),
+            "to_scale": scene.to_scale}

@@ -16,6 +16,7 @@ TABLE = (4.0, 2.0)       # mm: the table as drawn (width, height)
 
 class Scene:
     to_scale = True
+    tracked = "table"
 
     def __init__(self, result):
         self.result = result
@@ -32,6 +33,17 @@ class Scene:
         # exaggerated so that the largest tip deflection of the stitch shows a tenth of the length
         self.factor = float(10 ** np.floor(np.log10(0.1 * self.model.p.l / peak)))
         self.inset = None
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The rail's ends and the table's corners at sample i (mm); the deflection is not drawn."""
+        w, h = TABLE
+        x = self.x[i]
+        return {"rail_left": (self.xlim[0], 0.0), "rail_right": (self.xlim[1], 0.0),
+                "T1": (x - w / 2, 0.0), "T2": (x - w / 2, h), "T3": (x + w / 2, h),
+                "T4": (x + w / 2, 0.0), "table": (x, 0.0)}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        return [("rail_left", "rail_right"), ("T1", "T2", "T3", "T4", "T1")]
 
     def draw(self, ax, i: int) -> tuple[float, float]:
         ax.plot(self.xlim, [0.0, 0.0], color="0.6", lw=2)                      # the guide rail

@@ -15,6 +15,7 @@ CHAINS = (("A", "B", "C", "D"), ("D", "E"), ("E", "F", "H", "G"), ("G", "N", "K"
 
 class Scene:
     to_scale = True
+    tracked = "M"
 
     def __init__(self, result):
         self.result = result
@@ -28,6 +29,13 @@ class Scene:
 
     def _joints(self, i: int) -> dict[str, tuple[float, float]]:
         return {n: (m.x * MM, m.y * MM) for n, m in self.model.motion(self.phi[i]).joints.items()}
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The joints at sample i (mm), M where it was recorded."""
+        return {**self._joints(i), "M": (self.mx[i], self.my[i])}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        return list(CHAINS)
 
     def draw(self, ax, i: int) -> tuple[float, float]:
         j = self._joints(i)

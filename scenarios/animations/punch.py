@@ -19,6 +19,7 @@ BAR = 25.0         # mm: length of the force bar at the run's largest F2
 
 class Scene:
     to_scale = True
+    tracked = "tip"
 
     def __init__(self, result):
         self.result = result
@@ -48,6 +49,16 @@ class Scene:
         out = {name: (m.x * MM, m.y * MM) for name, m in js.items()}
         out["D"] = d
         return out
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The drawing's points at sample i (mm), for a page that draws it itself (chains)."""
+        tip = self.surface + self.y[i] * MM
+        return {**self._joints(i), "top": (self.x, tip + PUNCH), "tip": (self.x, tip),
+                "fabric_left": (self.x - 12.0, self.surface), "fabric_right": (self.x + 12.0, self.surface)}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        six_bar = (("O1", "A", "B", "O2", "C", "D"),) if self.model.p.mode == SIX_BAR else ()
+        return [*six_bar, ("D", "top"), ("top", "tip"), ("fabric_left", "fabric_right")]
 
     def draw(self, ax, i: int) -> tuple[float, float]:
         j = self._joints(i)

@@ -13,6 +13,7 @@ MM = 1e3
 
 class Scene:
     to_scale = True
+    tracked = "E"
 
     def __init__(self, result):
         self.result = result
@@ -28,6 +29,13 @@ class Scene:
         m, p = self.model.motion(self.phi[i]), self.model.p
         return {"A": (0.0, 0.0), "B": (m.B.x * MM, m.B.y * MM), "C": (m.C.x * MM, m.C.y * MM),
                 "D": (p.z_D * MM, p.x_D * MM), "E": (m.E.x * MM, m.E.y * MM)}
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The joints at sample i (mm), the eye E where it was recorded."""
+        return {**self._joints(i), "E": (self.ez[i], self.ex[i])}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        return [("A", "B", "C", "D"), ("B", "E", "C")]
 
     def draw(self, ax, i: int) -> tuple[float, float]:
         j = self._joints(i)

@@ -257,8 +257,9 @@ def _open_log(path: Path):
 
 def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: int | None = None,
               scheduler: str | None = None, keep_results: bool = False,
-              progress: bool = True) -> list[dict]:
-    """Run every point not yet done in out_dir; return all rows, in point order."""
+              progress: bool = True, on_point=None) -> list[dict]:
+    """Run every point not yet done in out_dir; return all rows, in point order.
+    `on_point(row)`, if given, hears of each row as it is logged."""
     from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
     from sewfmu.scenarios.cosim.system import check_parameters  # loaded on first use (start-up time)
     from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
@@ -293,6 +294,8 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
                 log.flush()
                 rows[row["key"]] = row
                 bar.update(1)
+                if on_point is not None:
+                    on_point(dict(row))
         bar.close()
         ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
         _write_table(ordered, [name for name, _ in points[0].values], out_dir / TABLE_FILE)

@@ -1,0 +1,41 @@
+"""`sewfmu app`'s options for the command line (sewfmu/cli.py adds the command from here)."""
+from __future__ import annotations
+
+import argparse
+
+from sewfmu.console import whole_number
+
+
+def add_command(sub) -> None:
+    p = sub.add_parser("app", help="the page: set, run, watch and compare a mechanism in the "
+                                   "browser (docs/app.md)")
+    p.add_argument("scenario", nargs="*", metavar="SCENARIO_OR_FILE",
+                   help="scenario files (TOML, SSP) to offer beside the catalogue, or catalogue "
+                        "names; the first is the one the page opens on")
+    p.add_argument("--port", type=_port, default=8050, help="the port (default 8050)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="the address to serve on (default 127.0.0.1: this machine only)")
+    p.add_argument("--open", action="store_true", help="open the page in the browser")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run sweeps on a Dask cluster, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--workers", type=whole_number,
+                   help="local worker processes of a sweep (default: all cores)")
+    p.set_defaults(func=run_command)
+
+
+def run_command(args) -> None:
+    from sewfmu.app import app  # loaded on first use (start-up time)
+
+    app(args.scenario, port=args.port, host=args.host, open_browser=args.open,
+        scheduler=args.scheduler, workers=args.workers)
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number from 1 to 65535, got "
+                                         f"{text!r}") from None
+    if not 1 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port number from 1 to 65535, got {value}")
+    return value

@@ -1,0 +1,154 @@
+"""The page's jobs: each run or sweep in a process of its own, known by a random id that only the
+tab that started it holds; what the process tells (progress, points, the result) is kept here,
+on the server, until the app ends. Nothing is shared between tabs but this table, and a tab can
+read only the jobs whose ids it was given.
+
+Processes come from a fork server that has loaded the API once (multiprocessing's forkserver
+context), so that a run starts in milliseconds and not in the seconds of importing numpy and
+fmpy; where there is none (not Linux), from spawn. Cancel ends the job's process group: a
+sweep's workers with it."""
+from __future__ import annotations
+
+import multiprocessing
+import os
+import secrets
+import signal
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from sewfmu.app.worker import main as work
+
+ENDING = 3.0            # s a job's process is given after SIGTERM before SIGKILL
+
+
+@dataclass
+class Job:
+    id: str
+    kind: str                       # "run" or "sweep"
+    request: dict                   # what the tab asked (scenario, changed values, grid)
+    process: object = None
+    status: str = "running"         # running, done, error, cancelled
+    done: int = 0                   # communication steps (run) or points (sweep) done
+    total: int = 0
+    result: dict | None = None
+    error: str | None = None
+    points: list = field(default_factory=list)
+    report: str | None = None       # the job making this run's report.html, once asked
+    started: float = field(default_factory=time.monotonic)
+    finished: float | None = None
+    ended: threading.Event = field(default_factory=threading.Event)   # its process is gone
+
+    @property
+    def fraction(self) -> float:
+        if self.status == "done":
+            return 1.0
+        return min(1.0, self.done / self.total) if self.total else 0.0
+
+
+def _context():
+    methods = multiprocessing.get_all_start_methods()
+    if "forkserver" in methods:
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["sewfmu.app.worker"])
+        return ctx
+    return multiprocessing.get_context("spawn")
+
+
+class Jobs:
+    def __init__(self, root: Path):
+        self.root = Path(root)
+        self._jobs: dict[str, Job] = {}
+        self._lock = threading.Lock()
+        self._ctx = _context()
+        self._closed = False
+
+    def start(self, kind: str, request: dict, folder: str | None = None) -> str:
+        """A new job; its files under root/<its id>, or root/<folder> (a run's report)."""
+        job_id = secrets.token_hex(8)
+        job = Job(job_id, kind, request, total=len(request.get("points", [])) or 0)
+        receive, send = self._ctx.Pipe(duplex=False)
+        process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
+                                    args=(kind, request, str(self.root / (folder or job_id)),
+                                          send))
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("the app is ending")
+            self._jobs[job_id] = job
+            job.process = process
+            process.start()
+        send.close()
+        threading.Thread(target=self._listen, args=(job, receive), daemon=True,
+                         name=f"listen-{job_id}").start()
+        return job_id
+
+    def get(self, job_id) -> Job | None:
+        return self._jobs.get(job_id) if isinstance(job_id, str) else None
+
+    def _listen(self, job: Job, conn) -> None:
+        """Everything the job's process says, until its pipe closes."""
+        while True:
+            try:
+                message = conn.recv()
+            except (EOFError, OSError):
+                break
+            what, *body = message
+            if what == "progress":
+                job.done, job.total = body
+            elif what == "point":
+                job.points.append(body[0])
+                job.done = len(job.points)
+            elif what == "done":
+                job.result, job.status, job.finished = body[0], "done", time.monotonic()
+            elif what == "error":
+                if job.status != "cancelled":
+                    job.error, job.status = body[0], "error"
+        conn.close()
+        job.process.join()              # here only: one thread waits for a process
+        job.ended.set()
+        if job.status == "running":
+            job.status = "error"
+            job.error = f"the run's process ended without a result (exit code " \
+                        f"{job.process.exitcode})"
+
+    def cancel(self, job_id) -> bool:
+        job = self.get(job_id)
+        if job is None or job.process is None:
+            return False
+        if job.status == "running":
+            job.status = "cancelled"
+        _end(job)
+        return True
+
+    def shutdown(self) -> None:
+        """End every job's process (and its group) and wait for each."""
+        with self._lock:
+            self._closed = True
+            jobs = list(self._jobs.values())
+        for job in jobs:
+            if job.process is not None and not job.ended.is_set():
+                if job.status == "running":
+                    job.status = "cancelled"
+                _end(job)
+
+
+def _end(job: Job) -> None:
+    """SIGTERM to the job's process group, SIGKILL to what is left after ENDING seconds."""
+    pid = job.process.pid
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        if job.ended.is_set():
+            break
+        _kill_group(pid, sig)
+        job.ended.wait(ENDING)
+    _kill_group(pid, signal.SIGKILL)           # a sweep's workers left behind, if any
+
+
+def _kill_group(pid: int, sig) -> None:
+    try:
+        os.killpg(pid, sig)
+    except (ProcessLookupError, PermissionError):
+        try:
+            os.kill(pid, sig)
+        except (ProcessLookupError, PermissionError):
+            pass

@@ -1,0 +1,182 @@
+"""The app's server: the page (Dash, on Flask), its own assets, and the files of its own runs by
+run id and fixed name; it serves until Ctrl-C or SIGTERM, then ends every job's process and
+removes the one temporary folder all runs were written under."""
+from __future__ import annotations
+
+import html
+import shutil
+import signal
+import socket
+import sys
+import tempfile
+import threading
+import webbrowser
+from pathlib import Path
+
+import dash
+from flask import abort, send_file
+from werkzeug.serving import WSGIRequestHandler, make_server
+
+import sewfmu
+from sewfmu.app.callbacks import register, values_of_choice
+from sewfmu.app.files import result_file
+from sewfmu.app.jobs import Jobs
+from sewfmu.app.layout import page as page_layout
+from sewfmu.app.values import changed_values, command_line
+
+ASSETS = Path(__file__).resolve().parent / "assets"
+
+
+class Page:
+    """What every tab's callbacks share: the scenarios on offer, the jobs, the results folder."""
+
+    def __init__(self, choices: dict[str, str], root: Path, scheduler: str | None = None,
+                 workers: int | None = None):
+        self.choices = choices                # label on the page -> catalogue name or path
+        self.root = root
+        self.jobs = Jobs(root)
+        self.scheduler = scheduler
+        self.workers = workers
+        self._lock = threading.Lock()
+
+    def check(self, label: str, typed: dict, defaults: dict) -> dict:
+        if label not in self.choices:
+            raise sewfmu.ScenarioError(f"unknown scenario {label!r}")
+        return changed_values(self.choices[label], typed, defaults)
+
+    def request(self, label: str, changed: dict) -> dict:
+        source = self.choices[label]
+        toml = None
+        if not source.lower().endswith(".ssp"):
+            toml = Path(source).read_text(encoding="utf-8-sig") \
+                if source.lower().endswith(".toml") else sewfmu.show(source)
+        return {"source": source, "scenario": label, "changed": changed, "toml": toml,
+                "command": command_line(label, changed)}
+
+    def entries(self, job, runs: list) -> list[dict]:
+        """The rows a finished run adds to its tab's table: one per variant ([compare])."""
+        number = 1 + len({r["id"] for r in runs})
+        out = []
+        for k, variant in enumerate(job.result["variants"]):
+            label = f"#{number}" + (f" {variant['label']}" if variant["label"] else "")
+            out.append({"id": job.id, "key": f"{job.id}:{k}", "variant": k, "label": label,
+                        "scenario": job.request["scenario"], "changed": job.request["changed"],
+                        "figures": variant["figures"], "units": variant["units"],
+                        "command": job.request["command"], "files": []})
+        return out
+
+    def report(self, job) -> str:
+        """A page that waits for report.html, which is made (once) when first asked for."""
+        with self._lock:
+            maker = self.jobs.get(job.report)
+            if maker is None or maker.status in ("error", "cancelled"):
+                if maker is not None and maker.status == "error":
+                    return f"<p>report.html could not be made: {html.escape(maker.error)}</p>"
+                job.report = self.jobs.start("report", job.request, folder=job.id)
+        return ("<meta http-equiv='refresh' content='2'><p>report.html is being made (the run "
+                "again, with its plots and animation); this page reloads until it is there</p>")
+
+    def variant(self, entry: dict) -> dict:
+        job = self.jobs.get(entry.get("id"))
+        if job is None or job.result is None:
+            return {"series": {}, "units": {}, "figures": {}, "mechanism": None}
+        return job.result["variants"][entry["variant"]]
+
+
+def create(page: Page) -> dash.Dash:
+    app = dash.Dash("sewfmu", title="sewfmu", assets_folder=str(ASSETS), update_title=None,
+                    serve_locally=True)
+    first = next(iter(page.choices), None)
+    app.layout = page_layout(list(page.choices), values_of_choice(page, first))
+    register(app, page)
+
+    @app.server.route("/runs/<run_id>/<name>")
+    def result(run_id, name):
+        path = result_file(page.root, run_id, name)
+        if path is None:
+            job = page.jobs.get(run_id)
+            if name != "report.html" or job is None or job.kind != "run" or \
+                    job.status != "done":
+                abort(404)
+            return page.report(job)
+        return send_file(path, mimetype=_MIME.get(path.suffix, "text/plain"),
+                         as_attachment=name != "report.html", download_name=name)
+    return app
+
+
+_MIME = {".csv": "text/csv", ".json": "application/json", ".html": "text/html",
+         ".toml": "text/plain", ".txt": "text/plain"}
+
+
+def choices_of(named: list[str]) -> dict[str, str]:
+    """The scenarios on offer: the files named (each checked now), then the catalogue, the
+    default scenario (punch_drive, as `sewfmu run`'s README example) first."""
+    chosen = {}
+    for item in named:
+        sewfmu.load(item)                      # a bad file is one line now, not on the page
+        chosen[item] = item
+    for name in sorted(sewfmu.scenarios(), key=lambda n: n != "punch_drive"):
+        chosen.setdefault(name, name)
+    return chosen
+
+
+def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser: bool = False,
+          scheduler: str | None = None, workers: int | None = None, ready=None) -> None:
+    """Serve the page until SIGINT or SIGTERM."""
+    choices = choices_of(list(scenarios))
+    root = Path(tempfile.mkdtemp(prefix="sewfmu_app_"))
+    page = Page(choices, root, scheduler, workers)
+    try:
+        try:
+            _free(host, port)
+            server = make_server(host, port, create(page).server, threaded=True,
+                                 request_handler=_Quiet)
+        except OSError as err:
+            raise PortTaken(f"{host}:{port}: cannot serve there ({err.strerror or err}); "
+                            f"--port takes another") from None
+        stop = threading.Event()
+        before = {s: signal.signal(s, lambda *_: stop.set())
+                  for s in (signal.SIGINT, signal.SIGTERM)}
+        url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{server.port}/"
+        if host not in ("127.0.0.1", "localhost", "::1"):
+            print(f"sewfmu: warning: serving on {host}: anyone who reaches port {server.port} "
+                  f"can run simulations on this machine", file=sys.stderr, flush=True)
+        print(f"sewfmu app: {url} (Ctrl-C stops it)", flush=True)
+        thread = threading.Thread(target=server.serve_forever, name="sewfmu-app", daemon=True)
+        thread.start()
+        if open_browser:
+            webbrowser.open(url)
+        if ready is not None:
+            ready(url)
+        try:
+            while not stop.wait(0.5):
+                pass
+        finally:
+            for s, handler in before.items():
+                signal.signal(s, handler)
+            server.shutdown()
+            thread.join(10)
+    finally:
+        page.jobs.shutdown()
+        shutil.rmtree(root, ignore_errors=True)
+    print("sewfmu app: stopped; every run's process ended", flush=True)
+
+
+def _free(host: str, port: int) -> None:
+    """Raise OSError if the port is taken (werkzeug would print two lines and exit)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        probe.bind((host, port))
+
+
+class _Quiet(WSGIRequestHandler):
+    """No line per request on the terminal: the URL line and errors only."""
+
+    def log_request(self, *args, **kwargs) -> None:
+        pass
+
+
+class PortTaken(sewfmu.Error):
+    """The port asked for is taken (or not ours to take)."""
+

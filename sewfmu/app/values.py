@@ -1,0 +1,126 @@
+"""The values a user types on the page, read as the command line reads `--set`: a TOML scalar
+(a number, true or false, a quoted string) or else the text itself ("955 rpm"), then given to
+`sewfmu.load(scenario, set=...)`, whose refusal (one line, a sewfmu.Error) is what the page
+shows. Also what reproduces a run: its command line and its scenario as TOML."""
+from __future__ import annotations
+
+import math
+import shlex
+import tomllib
+from typing import Any
+
+import sewfmu
+
+# the experiment's keys the page offers beside the instances' parameters: key -> (unit, meaning)
+EXPERIMENT = {"revolutions": ("rev", "shaft revolutions to run"),
+              "stop_time": ("s", "end of the run"),
+              "step": ("s", "communication step")}
+
+
+def value_of(text: str) -> Any:
+    """A typed value as `--set` reads it: a TOML scalar, else the text (a value with its unit)."""
+    try:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except (tomllib.TOMLDecodeError, RecursionError):
+        return text
+    return value if isinstance(value, (int, float, bool, str)) else text
+
+
+def shown(value: Any) -> str:
+    """A value as an input shows it: numbers to 6 significant digits (an unchanged input is not
+    sent, so the rounding never reaches a run)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:.6g}" if math.isfinite(value) else str(value)
+    return str(value)
+
+
+def inputs_of(source: str) -> list[dict]:
+    """Every value the page offers for a scenario: each instance's parameters and the
+    experiment's keys, as {name, value (text), unit, range, meaning}."""
+    rows = [{"name": f"{r['instance']}.{r['parameter']}", "value": shown(r["value"]),
+             "unit": r.get("unit") or "", "range": str(r.get("range") or ""),
+             "meaning": r.get("meaning") or ""} for r in sewfmu.parameters(source)]
+    scenario = sewfmu.load(source)
+    for key, (unit, meaning) in EXPERIMENT.items():
+        value = getattr(scenario, key, None)
+        if key == "stop_time" and scenario.revolutions is not None:
+            continue                      # a scenario of revolutions: its end is those
+        if value is not None:
+            rows.append({"name": f"experiment.{key}", "value": shown(value), "unit": unit,
+                         "range": "> 0", "meaning": meaning})
+    return rows
+
+
+def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str]) -> dict:
+    """The values typed that differ from the scenario's, checked by loading the scenario with
+    them: {name: text}. A bad one raises sewfmu.Error with its one line."""
+    changed = {}
+    for name, text in typed.items():
+        text = "" if text is None else str(text).strip()
+        if text == defaults.get(name):
+            continue
+        if not text:
+            raise _error(f"{name}: give a value (its scenario's is {defaults.get(name)})")
+        changed[name] = text
+    sewfmu.load(source, set={name: value_of(text) for name, text in changed.items()})
+    return changed
+
+
+def _error(line: str) -> Exception:
+    return sewfmu.ScenarioError(line)
+
+
+def command_line(scenario: str, changed: dict[str, str]) -> str:
+    """The command that reproduces a run: `sewfmu run NAME --set a=b ...`."""
+    sets = " ".join(f"--set {shlex.quote(f'{k}={v}')}" for k, v in changed.items())
+    return f"sewfmu run {shlex.quote(scenario)}" + (f" {sets}" if sets else "")
+
+
+def scenario_toml(text: str, changed: dict[str, str]) -> str:
+    """A TOML scenario's text with the changed values written into it (an instance's parameter
+    into its `parameters` table, an experiment key into [experiment])."""
+    data = tomllib.loads(text)
+    for name, typed in changed.items():
+        inst, _, key = name.partition(".")
+        if inst == "experiment":
+            data.setdefault("experiment", {})[key] = value_of(typed)
+        else:
+            table = data.setdefault("instances", {}).setdefault(inst, {})
+            table.setdefault("parameters", {})[key] = value_of(typed)
+    return _toml(data)
+
+
+def _toml(data: dict, prefix: str = "") -> str:
+    """A small TOML writer for a scenario's tables: scalars, lists and inline tables of them."""
+    plain = [f"{k} = {_scalar(v)}" for k, v in data.items()
+             if not isinstance(v, dict) or k == "parameters"]
+    tables = [(k, v) for k, v in data.items() if isinstance(v, dict) and k != "parameters"]
+    parts = ["\n".join(plain)] if plain else []
+    for key, table in tables:
+        name = f"{prefix}{_key(key)}"
+        if all(isinstance(v, dict) for v in table.values()) and table:
+            parts.append(_toml(table, f"{name}."))
+        else:
+            parts.append(f"[{name}]\n{_toml(table, f'{name}.')}".rstrip())
+    return "\n\n".join(p for p in parts if p) + ("\n" if not prefix else "")
+
+
+def _key(key: str) -> str:
+    return key if key.replace("_", "").replace("-", "").isalnum() else _scalar(key)
+
+
+def _scalar(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ("nan" if value != value else
+                                                         ("inf" if value > 0 else "-inf"))
+    if isinstance(value, list):
+        return "[" + ", ".join(_scalar(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_scalar(v)}" for k, v in value.items()) + " }"
+    return str(value)

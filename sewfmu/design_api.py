@@ -1,0 +1,85 @@
+"""The design studies of the API (docs/design.md): sewfmu.optimize, sewfmu.fit and
+sewfmu.sensitivity, each what its command does (sewfmu/design_cli.py), over the wing
+scenarios/design/. A module of its own beside sewfmu/api.py (that one's size)."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping
+
+from sewfmu.api import _folder, load
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError
+
+
+def _design_scenario(scenario, set):
+    """The scenario, its FMU files (built where missing) and their modelDescriptions by
+    instance: what a design study checks its ranges and data against before anything runs."""
+    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
+
+    sc = load(scenario, set)
+    paths = fmus_for(sc)
+    return sc, paths, {n: extracted_fmu(Path(paths[i.fmu]))[1] for n, i in sc.instances.items()}
+
+
+def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
+             minimize: str | None = None, maximize: str | None = None,
+             target: Mapping[str, Any] | None = None, constraints: list | None = None,
+             set: Mapping[str, Any] | None = None, method: str = "local",
+             workers: int | None = None, out: str | Path | None = None, plot: bool = False,
+             max_evaluations: int | None = None, progress: bool = False):
+    """`sewfmu optimize`: vary {"inst.param": (lo, hi) or "LO..HI unit"}, one of
+    minimize=FIGURE, maximize=FIGURE, target={FIGURE: value}; constraints ["FIGURE>=VALUE unit"].
+    An Optimum (.best, .figures, .evaluations, .converged); with `out` evaluations.csv (a rerun
+    there resumes), optimize.json, with `plot` convergence.png. `progress` shows a bar on the
+    terminal."""
+    from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    sc, paths, described = _design_scenario(scenario, set)
+    known = space.figures_of_scenario(sc)
+    goal = space.goal_of(known, minimize, maximize, target)
+    limits = space.constraints_of(known, constraints)
+    variables = space.variables(sc, vary, described)
+    if plot and out is None:
+        raise ScenarioError("plot is a file: give out= a folder for it")
+    return design.optimize(sc, paths, variables, goal, limits, method, workers, out, plot,
+                           max_evaluations, progress)
+
+
+def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
+        set: Mapping[str, Any] | None = None, out: str | Path | None = None,
+        max_evaluations: int | None = None, progress: bool = False):
+    """`sewfmu fit`: data a CSV file (a `time` column, columns named like recorded outputs) or a
+    structured array; free {"inst.param": (lo, hi)}. A Fit (.estimates, .standard_errors,
+    .residuals); with `out` fit.json, fit.png and fit_evaluations.jsonl (a rerun there
+    resumes). `progress` shows a bar on the terminal."""
+    from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    sc, paths, described = _design_scenario(scenario, set)
+    measured = design.read_data(data)
+    ends = {"experiment.stop_time", "experiment.revolutions"}
+    sc = design.check_data(measured, sc, described, keep_end=bool(ends & {*(set or {})}))
+    free = space.variables(sc, free, described, option="--free")
+    return design.fit(sc, paths, free, measured, out, True, max_evaluations, progress)
+
+
+def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],
+                *, set: Mapping[str, Any] | None = None, method: str = "sobol",
+                samples: int | None = None, workers: int | None = None,
+                out: str | Path | None = None, progress: bool = False):
+    """`sewfmu sensitivity`: SALib's Sobol or Morris indices of key figures over parameter
+    ranges, the samples run as a sweep (resumable into `out`). A Sensitivity whose `table`
+    ranks the parameters for each figure."""
+    from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    sc, _, described = _design_scenario(scenario, set)
+    named = space.figures_named(space.figures_of_scenario(sc), figures)
+    variables = space.variables(sc, vary, described)
+    return design.sensitivity(sc, variables, named, space.figures_of_scenario(sc), method,
+                              samples, workers, out, progress)

@@ -1,0 +1,310 @@
+"""`sewfmu app` without a browser: the values as the command line checks them, the jobs in their
+processes (a run, a cancel, two at once), the files it serves and those it refuses, the command
+line's refusals, and what the page asks of the public API (a progress callback, a sweep's
+points as they finish, the mechanism's drawing as numbers). The page in a browser:
+tests/test_app_browser.py."""
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import sewfmu
+
+pytest.importorskip("dash", reason="the extra app (pip install -e '.[app]') is not installed")
+
+from sewfmu.app import files, values  # noqa: E402
+from sewfmu.app.jobs import Jobs  # noqa: E402
+
+SHORT = {"experiment.revolutions": "2"}
+
+
+def _defaults():
+    return {row["name"]: row["value"] for row in values.inputs_of("punch_drive")}
+
+
+def test_the_inputs_are_every_parameter_and_the_experiment():
+    names = [row["name"] for row in values.inputs_of("punch_drive")]
+    assert "shaft.omega0" in names and "punch.c2" in names
+    assert "experiment.revolutions" in names and "experiment.step" in names
+    units = {row["name"]: row["unit"] for row in values.inputs_of("punch_drive")}
+    assert units["shaft.omega0"] == "rad/s"
+
+
+def test_only_changed_values_are_sent_and_each_is_checked_as_set_is():
+    defaults = _defaults()
+    typed = {**defaults, "shaft.omega0": "955 rpm", "experiment.revolutions": "2"}
+    assert values.changed_values("punch_drive", typed, defaults) == \
+        {"shaft.omega0": "955 rpm", "experiment.revolutions": "2"}
+    with pytest.raises(sewfmu.Error) as bad:
+        values.changed_values("punch_drive", {**defaults, "shaft.omega0": "fast"}, defaults)
+    assert "\n" not in str(bad.value) and "shaft.omega0" in str(bad.value)
+    with pytest.raises(sewfmu.Error, match="punch.c2: give a value"):
+        values.changed_values("punch_drive", {**defaults, "punch.c2": " "}, defaults)
+    with pytest.raises(sewfmu.Error, match="unknown|no parameter|nowhere|not"):
+        values.changed_values("punch_drive", {"shaft.nowhere": "1"}, defaults)
+
+
+def test_the_command_line_and_the_toml_reproduce_the_values(tmp_path):
+    changed = {"shaft.omega0": "955 rpm", "experiment.revolutions": "2", "punch.c2": "6e4"}
+    assert values.command_line("punch_drive", {"shaft.omega0": "955 rpm"}) == \
+        "sewfmu run punch_drive --set 'shaft.omega0=955 rpm'"
+    path = tmp_path / "used.toml"
+    path.write_text(values.scenario_toml(sewfmu.show("punch_drive"), changed))
+    used, wanted = sewfmu.load(path), sewfmu.load("punch_drive", set={
+        k: values.value_of(v) for k, v in changed.items()})
+    assert used.revolutions == wanted.revolutions == 2
+    assert used.instances["shaft"].parameters == wanted.instances["shaft"].parameters
+    assert used.instances["punch"].parameters["c2"] == 6e4
+
+
+@pytest.mark.parametrize("run_id, name", [
+    ("../../etc", "passwd"), ("0123456789abcdef", "../summary.json"),
+    ("0123456789abcdef", "/etc/passwd"), ("0123456789abcde/", "results.csv"),
+    ("0123456789ABCDEF", "results.csv"), ("0123456789abcdef", "punch_drive.png"),
+    (None, "results.csv"), ("0123456789abcdef", None), ("..", "results.csv"),
+    ("0123456789abcdef/..", "results.csv")])
+def test_a_file_is_served_only_by_run_id_and_a_fixed_name(tmp_path, run_id, name):
+    (tmp_path / "0123456789abcdef").mkdir()
+    for n in files.FILES + ("punch_drive.png",):
+        (tmp_path / "0123456789abcdef" / n).write_text("x")
+    assert files.result_file(tmp_path, run_id, name) is None
+
+
+def test_a_run_s_own_files_are_served(tmp_path):
+    (tmp_path / "0123456789abcdef").mkdir()
+    (tmp_path / "0123456789abcdef" / "results.csv").write_text("time\n0\n")
+    assert files.result_file(tmp_path, "0123456789abcdef", "results.csv") == \
+        tmp_path / "0123456789abcdef" / "results.csv"
+    assert files.result_file(tmp_path, "0123456789abcdef", "summary.json") is None
+    assert files.present(tmp_path, "0123456789abcdef") == ["results.csv"]
+
+
+def _request(changed):
+    return {"source": "punch_drive", "scenario": "punch_drive", "changed": changed,
+            "toml": sewfmu.show("punch_drive"), "command": ""}
+
+
+def _wait(jobs, *ids, timeout=120):
+    end = time.monotonic() + timeout
+    while any(jobs.get(i).status == "running" for i in ids):
+        assert time.monotonic() < end, "a job did not finish"
+        time.sleep(0.05)
+
+
+def test_two_runs_at_once_each_give_the_figures_of_their_own_values(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        slow = {**SHORT, "shaft.omega0": "100"}
+        fast = {**SHORT, "shaft.omega0": "300 rad/s"}
+        a, b = jobs.start("run", _request(slow)), jobs.start("run", _request(fast))
+        assert a != b
+        _wait(jobs, a, b)
+        for job_id, changed in ((a, slow), (b, fast)):
+            job = jobs.get(job_id)
+            assert job.status == "done", job.error
+            got = job.result["variants"][0]["figures"]
+            want = sewfmu.run("punch_drive", set={k: values.value_of(v)
+                                                  for k, v in changed.items()}).figures
+            for key in ("F2_peak", "F2_weld_mean", "contact_onset_deg"):
+                assert got[key] == pytest.approx(want[key], rel=1e-12), key
+            assert sorted(files.present(tmp_path, job_id)) == \
+                ["command.txt", "results.csv", "scenario.toml", "summary.json"]
+            assert job.fraction == 1.0
+            drawing = job.result["variants"][0]["mechanism"]
+            assert drawing["tracked"] == "tip" and len(drawing["crank_deg"]) == 36
+    finally:
+        jobs.shutdown()
+
+
+def test_cancel_ends_the_run_s_process_and_writes_nothing(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        job_id = jobs.start("run", _request({"experiment.revolutions": "400"}))
+        end = time.monotonic() + 60
+        while jobs.get(job_id).done == 0:
+            assert time.monotonic() < end
+            time.sleep(0.05)
+        assert jobs.cancel(job_id)
+        job = jobs.get(job_id)
+        assert job.ended.wait(10) and job.status == "cancelled"
+        assert not job.process.is_alive()
+        assert files.present(tmp_path, job_id) == []
+        assert not jobs.cancel("not-a-job")
+    finally:
+        jobs.shutdown()
+
+
+def test_a_failing_run_is_its_one_line(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        job_id = jobs.start("run", _request({**SHORT, "shaft.omega0": "-5"}))
+        _wait(jobs, job_id)
+        job = jobs.get(job_id)
+        assert job.status == "error" and "omega0" in job.error and "\n" not in job.error
+    finally:
+        jobs.shutdown()
+
+
+def test_run_tells_its_progress_to_a_function():
+    heard = []
+    sewfmu.run("punch_drive", set={"experiment.revolutions": 10},
+               progress=lambda done, total: heard.append((done, total)))
+    assert heard and all(0 <= done <= total for done, total in heard)
+    assert all(b >= a for (a, _), (b, _) in zip(heard, heard[1:]))
+
+
+def test_sweep_tells_each_point_as_it_finishes():
+    heard = []
+    s = sewfmu.sweep("punch_drive", grid={"shaft.omega0": [100.0, 200.0]},
+                     set={"experiment.revolutions": 1}, workers=2, on_point=heard.append)
+    assert sorted(r["shaft.omega0"] for r in heard) == [100.0, 200.0]
+    assert {r["key"] for r in heard} == {r["key"] for r in s.rows}
+
+
+@pytest.mark.parametrize("name, tracked, columns", [
+    ("punch_drive", "tip", None), ("feed", "M", ("feed.M_x", "feed.M_y")),
+    ("takeup", "E", ("takeup.E_z", "takeup.E_x"))])
+def test_the_mechanism_s_drawing_holds_the_recorded_point(name, tracked, columns):
+    run = sewfmu.run(name, set={"experiment.revolutions": 2})
+    drawing = run.mechanism(frames=12)
+    assert drawing["tracked"] == tracked and len(drawing["crank_deg"]) == 12
+    assert all(0 <= a < 360 for a in drawing["crank_deg"])
+    assert all(n in drawing["points"] for chain in drawing["chains"] for n in chain)
+    i = drawing["samples"]
+    if columns:
+        x, y = (run.series[c][i] * 1e3 for c in columns)
+    else:       # the tip over the fabric by the recorded height y
+        surface = np.array([p[1] for p in drawing["points"]["fabric_left"]])
+        x, y = run.series["punch.y"][i] * 0, surface + run.series["punch.y"][i] * 1e3
+        x = x + drawing["points"]["tip"][0][0]
+    got = np.array(drawing["points"][tracked])
+    assert np.allclose(got[:, 0], x) and np.allclose(got[:, 1], y)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _sewfmu(*args, code=None, timeout=60):
+    lead = code or "import sys; from sewfmu.cli import main; sys.exit(main(sys.argv[1:]))"
+    return subprocess.run([sys.executable, "-c", lead, *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+@pytest.mark.parametrize("port", ["0", "65536", "http", "-1"])
+def test_a_bad_port_is_one_line(port):
+    done = _sewfmu("app", "--port", port)
+    assert done.returncode == 2 and "--port" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_a_port_in_use_is_one_line_and_exit_1():
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        done = _sewfmu("app", "--port", str(taken.getsockname()[1]))
+    assert done.returncode == 1, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "--port" in done.stderr
+    assert "http://" not in done.stdout
+
+
+def test_without_the_extra_the_command_says_how_to_install_it():
+    code = ("import sys; sys.modules['dash'] = None; from sewfmu.cli import main; "
+            "sys.exit(main(sys.argv[1:]))")
+    done = _sewfmu("app", "--port", str(_free_port()), code=code)
+    assert done.returncode == 1
+    line = done.stderr.strip()
+    assert len(line.splitlines()) == 1 and "pip install" in line and "[app]" in line
+
+
+def test_a_scenario_file_that_cannot_load_is_one_line(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("this is not toml [")
+    done = _sewfmu("app", str(bad), "--port", str(_free_port()))
+    assert done.returncode == 1 and len(done.stderr.strip().splitlines()) == 1
+
+
+def test_sewfmu_app_is_callable_as_the_package_and_as_the_name():
+    import sewfmu.app as package
+
+    assert callable(sewfmu.app) and callable(package)
+    with pytest.raises(sewfmu.Error, match="port"):
+        sewfmu.app(port=70000)
+    with pytest.raises(sewfmu.Error, match="port"):
+        package(port="8050")
+
+
+def test_another_host_is_warned_of_and_sigterm_ends_the_server_with_0(tmp_path):
+    import os
+    import signal
+
+    server = subprocess.Popen([sys.executable, "-m", "sewfmu", "app", "--host", "127.0.0.2",
+                               "--port", str(_free_port())], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True,
+                              env={**os.environ, "TMPDIR": str(tmp_path)})
+    try:
+        line = server.stdout.readline()
+        assert line.startswith("sewfmu app: http://127.0.0.2:"), line
+        assert list(tmp_path.glob("sewfmu_app_*"))
+    finally:
+        server.send_signal(signal.SIGTERM)
+        code = server.wait(60)
+    warning = server.stderr.read().strip().splitlines()
+    assert code == 0 and len(warning) == 1 and "anyone who reaches" in warning[0]
+    assert not list(tmp_path.glob("sewfmu_app_*"))
+
+
+@pytest.mark.slow
+def test_report_html_is_made_into_the_run_s_folder_when_asked_for(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        run = jobs.start("run", _request(SHORT))
+        _wait(jobs, run)
+        assert "report.html" not in files.present(tmp_path, run)
+        report = jobs.start("report", jobs.get(run).request, folder=run)
+        _wait(jobs, report, timeout=300)
+        assert jobs.get(report).status == "done", jobs.get(report).error
+        assert "report.html" in files.present(tmp_path, run)
+        assert sorted(p.name for p in tmp_path.iterdir()) == [run]      # nothing else left
+    finally:
+        jobs.shutdown()
+
+
+def _group(pgid: int) -> list[int]:
+    from pathlib import Path
+
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            found.append(int(stat.parent.name))
+    return found
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads Linux's /proc")
+def test_cancel_of_a_sweep_ends_its_workers_too(tmp_path):
+    jobs = Jobs(tmp_path)
+    try:
+        grid = {"shaft.omega0": [100.0, 150.0, 200.0, 250.0]}
+        job_id = jobs.start("sweep", {**_request({"experiment.revolutions": "300"}),
+                                      "grid": grid, "workers": 2, "points": [0] * 4})
+        job = jobs.get(job_id)
+        end = time.monotonic() + 60
+        while len(_group(job.process.pid)) < 3:        # the job, its fork server, a worker
+            assert time.monotonic() < end and job.status == "running", job.error
+            time.sleep(0.1)
+        assert jobs.cancel(job_id) and job.status == "cancelled"
+        end = time.monotonic() + 30
+        while _group(job.process.pid) and time.monotonic() < end:
+            time.sleep(0.1)
+        assert _group(job.process.pid) == []
+    finally:
+        jobs.shutdown()
