@@ -6,6 +6,7 @@ import atexit
 import os
 import shutil
 import tempfile
+from pathlib import Path
 
 import pytest
 from hypothesis import settings
@@ -90,3 +91,32 @@ def pytest_terminal_summary(terminalreporter):
                          f"SEWFMU_FMUCHECK={given!r} is not an executable file.", red=True)
         for line in FMUCHECK_HOWTO:
             write.write_line(line, red=True)
+
+
+@pytest.fixture(scope="session")
+def design_page(tmp_path_factory, fmu_dir):
+    """docs/design.md's Python blocks, in order, run as one script in a fresh process from an
+    empty folder (as a user pastes them: `python try.py`), once for every test that reads their
+    results: the names they define, as the script left them (pickled at its end)."""
+    import pickle
+    import re
+    import subprocess
+    import sys
+
+    page = (Path(__file__).resolve().parent.parent / "docs" / "design.md").read_text("utf-8")
+    blocks = re.findall(r"^```python\n(.*?)^```", page, re.M | re.S)
+    folder = tmp_path_factory.mktemp("design_page")
+    keep = ("\nimport pickle as _pickle\n_kept = {}\n"
+            "for _name, _value in list(globals().items()):\n"
+            "    try:\n        _pickle.dumps(_value)\n    except Exception:\n        continue\n"
+            "    if not _name.startswith('_'):\n        _kept[_name] = _value\n"
+            "with open('namespace.pickle', 'wb') as _f:\n    _pickle.dump(_kept, _f)\n")
+    (folder / "try.py").write_text("\n".join(blocks) + keep, encoding="utf-8")
+    env = {**os.environ, "SEWFMU_FMU_DIR": str(fmu_dir)}
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run([sys.executable, "try.py"], cwd=folder, env=env, capture_output=True,
+                          text=True, timeout=2400, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, \
+        f"docs/design.md's examples fail as a script:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}"
+    with open(folder / "namespace.pickle", "rb") as f:
+        return pickle.load(f)

@@ -199,7 +199,7 @@ def _sewfmu(*args, code=None, timeout=60):
 @pytest.mark.parametrize("port", ["0", "65536", "http", "-1"])
 def test_a_bad_port_is_one_line(port):
     done = _sewfmu("app", "--port", port)
-    assert done.returncode == 2 and "--port" in done.stderr
+    assert done.returncode == 1 and "--port" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
 
 

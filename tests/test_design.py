@@ -201,29 +201,10 @@ def _figure(name: str, **parameters) -> float:
 
 
 @pytest.fixture(scope="module")
-def page(tmp_path_factory, fmu_dir):
-    """docs/design.md's examples, in order, in one namespace, in an empty folder."""
-    import os
-
-    blocks = re.findall(r"^```python\n(.*?)^```", (REPO / "docs" / "design.md").read_text(),
-                        re.M | re.S)
-    assert len(blocks) >= 4
-    folder = tmp_path_factory.mktemp("design_page")
-    before = os.getcwd()
-    os.chdir(folder)
-    previous = os.environ.get("SEWFMU_FMU_DIR")
-    os.environ["SEWFMU_FMU_DIR"] = str(fmu_dir)
-    namespace: dict = {}
-    try:
-        for number, block in enumerate(blocks, 1):
-            exec(compile(block, f"docs/design.md example {number}", "exec"), namespace)
-    finally:
-        os.chdir(before)
-        if previous is None:
-            os.environ.pop("SEWFMU_FMU_DIR", None)
-        else:
-            os.environ["SEWFMU_FMU_DIR"] = previous
-    return namespace
+def page(design_page):
+    """docs/design.md's examples as a user runs them: one script, a fresh process, an empty
+    folder (tests/conftest.py's design_page); the names they define."""
+    return design_page
 
 
 @pytest.mark.slow

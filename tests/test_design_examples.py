@@ -1,12 +1,12 @@
-"""docs/design.md's worked examples from the papers, each run as the page writes it (its Python
-block, in an empty folder) and its answer checked against a computation that does not use the
+"""docs/design.md's worked examples from the papers, run as the page writes them (its Python
+blocks as one script, in a fresh process, from an empty folder: conftest.py's design_page) and
+each answer checked against a computation that does not use the
 design wing: plain sewfmu.run calls (bisections, one-at-a-time differences) and sewfmu.sweep
 grids. The examples: the fastest shaft speed at which the punch lands once per revolution, a
 feed lever length for a wanted path width of the feed dog, the stitch rate with the least
 residual vibration of the carriage, the ranking of the punch's parameters for the welding
 force."""
 import math
-import re
 from pathlib import Path
 
 import numpy as np
@@ -21,17 +21,13 @@ RPM = math.pi / 30.0                        # rad/s per rpm
 @pytest.fixture(autouse=True)
 def _fmus(fmu_dir, monkeypatch, tmp_path):
     monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
-    monkeypatch.chdir(tmp_path)             # the examples write results/... here
+    monkeypatch.chdir(tmp_path)             # the plain runs' files, if any, go here
 
 
-def _example(heading: str) -> dict:
-    """The Python block under the page's `### heading`, run in a namespace of its own."""
-    page = (REPO / "docs" / "design.md").read_text(encoding="utf-8")
-    section = page.split(f"### {heading}\n", 1)[1].split("\n## ", 1)[0].split("\n### ", 1)[0]
-    (block,) = re.findall(r"^```python\n(.*?)^```", section, re.M | re.S)
-    namespace: dict = {}
-    exec(compile(block, f"docs/design.md: {heading}", "exec"), namespace)
-    return namespace
+@pytest.fixture
+def page(design_page):
+    """The page's examples as a user runs them (one script in a fresh process: conftest.py)."""
+    return design_page
 
 
 def _bisect(below, lo: float, hi: float, tol: float) -> tuple[float, float]:
@@ -49,8 +45,8 @@ PUNCH_FAST = {"experiment.revolutions": 3, "experiment.step": "0.1 ms"}
 
 
 @pytest.mark.slow
-def test_the_fastest_speed_with_one_landing_matches_a_bisection_and_a_grid_of_plain_runs():
-    ex = _example("The fastest shaft speed at which the punch lands once per revolution")
+def test_the_fastest_speed_with_one_landing_matches_a_bisection_and_a_grid_of_plain_runs(page):
+    ex = page
     fast, once, twice = ex["fast"], ex["once"], ex["twice"]
     assert fast.algorithm == "brentq" and fast.converged
     assert 0.0 < twice - once <= 1e-5 * (5000 - 3000) * RPM      # the jump, bracketed
@@ -75,8 +71,8 @@ def test_the_fastest_speed_with_one_landing_matches_a_bisection_and_a_grid_of_pl
 
 # --- a feed lever length for a wanted path width of the feed dog --------------------------------
 @pytest.mark.slow
-def test_the_lever_for_a_path_width_matches_a_bisection_of_plain_runs():
-    ex = _example("A lever of the feed for a feed-dog path 8 mm wide")
+def test_the_lever_for_a_path_width_matches_a_bisection_of_plain_runs(page):
+    ex = page
     width = ex["width"]
     assert width.algorithm == "brentq" and width.converged
     assert width.figures["M_path_width_mm"] == pytest.approx(8.0, rel=1e-6)
@@ -91,8 +87,8 @@ def test_the_lever_for_a_path_width_matches_a_bisection_of_plain_runs():
 
 # --- the stitch rate with the least residual vibration of the carriage --------------------------
 @pytest.mark.slow
-def test_the_global_optimum_of_the_vibration_is_the_best_of_a_dense_sweep():
-    ex = _example("The stitch rate with the least vibration in the last stitch")
+def test_the_global_optimum_of_the_vibration_is_the_best_of_a_dense_sweep(page):
+    ex = page
     rate = ex["rate"]
     assert rate.algorithm == "differential_evolution" and rate.feasible
     found = rate.best["shaft.omega0"] / RPM
@@ -112,8 +108,8 @@ def test_the_global_optimum_of_the_vibration_is_the_best_of_a_dense_sweep():
 
 # --- the ranking of the punch's parameters for the welding force --------------------------------
 @pytest.mark.slow
-def test_the_morris_ranking_matches_one_at_a_time_differences_of_plain_runs():
-    ex = _example("Which of the punch's parameters move the welding force")
+def test_the_morris_ranking_matches_one_at_a_time_differences_of_plain_runs(page):
+    ex = page
     rank, ranges = ex["rank"], ex["ranges"]
     mu_star = {name: entry["mu_star"] for name, entry in rank.indices["F2_weld_mean"].items()}
     # one at a time from the catalogue's values: the figure at each end of each range; Morris's
