@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import importlib
 import json
-from importlib import metadata
 from urllib.parse import unquote, urlparse
 
 from sewfmu.errors import Error
@@ -38,6 +37,8 @@ def require(module: str, what: str):
 def install_command(extra: str) -> str:
     """The pip command that adds an extra to this sewfmu, from where it was installed: its
     checkout (editable or not), its wheel, or the package index."""
+    from importlib import metadata  # 30 ms: only when a command is to be named
+
     # (a build's sewfmu.egg-info in the working folder is a distribution too, without origin)
     found = [d.read_text("direct_url.json") for d in metadata.distributions(name="sewfmu")]
     try:
