@@ -137,6 +137,29 @@ def test_cancel_ends_the_run_s_process_and_writes_nothing(tmp_path):
         jobs.shutdown()
 
 
+def test_no_more_jobs_than_the_app_runs_at_once(tmp_path, capfd):
+    """A script posting Run in a loop must not start a process each time: beyond MAX_RUNNING
+    running jobs, one line; a cancelled job frees its place, and ends without a traceback."""
+    from sewfmu.app.jobs import MAX_RUNNING, Busy
+
+    jobs = Jobs(tmp_path)
+    try:
+        started = [jobs.start("run", _request({"experiment.revolutions": "400"}))
+                   for _ in range(MAX_RUNNING)]
+        with pytest.raises(Busy, match="the most this app runs at once"):
+            jobs.start("run", _request(SHORT))
+        end = time.monotonic() + 60
+        while jobs.get(started[0]).done == 0:          # running, not just starting
+            assert time.monotonic() < end
+            time.sleep(0.05)
+        jobs.cancel(started[0])
+        assert jobs.get(started[0]).ended.wait(10)
+        assert jobs.start("run", _request(SHORT))       # its place is free again
+    finally:
+        jobs.shutdown()
+    assert "Traceback" not in capfd.readouterr().err
+
+
 def test_a_failing_run_is_its_one_line(tmp_path):
     jobs = Jobs(tmp_path)
     try:

@@ -58,7 +58,7 @@ def register(app, page) -> None:
                 changed = page.check(label, typed, defaults or {})
                 new = page.jobs.start("run", page.request(label, changed))
             except sewfmu.Error as err:
-                return None, True, 0, "", " ".join(str(err).split()), NOT
+                return None, True, 0, "", _one_line(err), NOT
             return new, False, 0, "running…", "", NOT
         job = page.jobs.get(job_id)
         if job is None:
@@ -163,7 +163,7 @@ def register(app, page) -> None:
                            "points": [0] * int(np.prod([len(v) for v in grid.values()]))}
                 new = page.jobs.start("sweep", request)
             except sewfmu.Error as err:
-                return None, True, 0, "", " ".join(str(err).split()), NOT
+                return None, True, 0, "", _one_line(err), NOT
             return new, False, 0, "running…", "", {"rows": [], "swept": list(grid),
                                                    "units": {}}
         job = page.jobs.get(job_id)
@@ -234,3 +234,8 @@ def _range(page, label: str, name: str, lo, hi, n) -> list[float]:
         sewfmu.load(page.choices[label], set={name: end})
     return [float(v) for v in np.linspace(a, b, count)]
 
+
+def _one_line(err: Exception, most: int = 400) -> str:
+    """A refusal as the page shows it: one line, a value of a megabyte cut short."""
+    text = " ".join(str(err).split())
+    return text if len(text) <= most else text[:most - 1] + "…"

@@ -18,9 +18,17 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import sewfmu
 from sewfmu.app.worker import main as work
 
 ENDING = 3.0            # s a job's process is given after SIGTERM before SIGKILL
+# jobs running at once, over all tabs and clients: more would only share the cores (a sweep uses
+# them all) and let one client (a script posting Run) take the machine
+MAX_RUNNING = max(2, os.cpu_count() or 1)
+
+
+class Busy(sewfmu.Error):
+    """As many jobs as the app runs at once are running."""
 
 
 @dataclass
@@ -75,6 +83,10 @@ class Jobs:
         with self._lock:
             if self._closed:
                 raise RuntimeError("the app is ending")
+            running = sum(1 for j in self._jobs.values() if not j.ended.is_set())
+            if running >= MAX_RUNNING:
+                raise Busy(f"{running} runs or sweeps are going already, the most this app runs "
+                           f"at once: wait for one to end, or Cancel one")
             self._jobs[job_id] = job
             job.process = process
             process.start()

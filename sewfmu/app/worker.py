@@ -46,6 +46,8 @@ def main(kind: str, job: dict, folder: str, conn) -> None:
         conn.send(("error", " ".join(str(err).split())))
     except Exception as err:        # one line on the page, as the command line would say it
         conn.send(("error", f"unexpected {type(err).__name__}: {err}"))
+    except BaseException:           # ended by the app (Cancel, its own end): nothing to tell
+        pass
     finally:
         conn.close()
 
