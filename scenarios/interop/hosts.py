@@ -94,8 +94,8 @@ def _load_tbb() -> None:
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
     from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
+    _load_tbb()                                       # before ecospy: its library needs it
     require("ecospy", "a run in ecos")                # or one line naming the extra
-    _load_tbb()
     from ecospy import EcosSimulation  # optional extra (interop)
 
     sim = EcosSimulation(step_size=step, ssp_path=ssp)
