@@ -86,3 +86,11 @@ def test_ctrl_c_to_a_sweeps_process_group_prints_one_line_and_no_worker_tracebac
     _, err = proc.communicate(timeout=120)
     assert proc.returncode in (0, 130)
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+
+
+def test_a_sweep_plot_without_an_analysis_says_there_is_nothing_to_draw(tmp_path, capsys):
+    sc = sewfmu.load("punch_drive", set=SHORT)
+    sc.analysis, sc.roles = None, {}
+    sewfmu.sweep(sc, grid={"punch.F30": [1.0, 2.0]}, out=tmp_path, plot=True, workers=1)
+    assert "the sweep's plot is left out: punch_drive has no analysis" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*.png"))

@@ -481,6 +481,10 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
                    if f != "n_contacts"}
         plot_table(rows, swept, figures, picture, sweep_title(scenario, rows, swept),
                    {param: declared_unit(scenario, param) for param in swept})
+    else:                                   # asked for, and no key figure to draw
+        warn(f"the sweep's plot is left out: {scenario.name} has no analysis (no mechanism of "
+             f"sewfmu's named by `analysis`), so its points have no key figures to draw; "
+             f"sweep.csv holds each point's status")
     if report:
         from sewfmu.scenarios.runs.report import sweep_report  # loaded on first use (start-up time)
         sweep_report(out_dir / "report.html", scenario, rows, swept,
