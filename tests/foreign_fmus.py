@@ -243,3 +243,21 @@ def build_gain3(folder: Path) -> Path:
     script = folder / "gain3.py"
     script.write_text(GAIN3_PY)
     return Path(FmuBuilder.build_FMU(script, dest=folder))
+
+
+def rewritten(fmu: Path, folder: Path, name: str = "Rewritten.fmu", **attributes: str) -> Path:
+    """A copy of the FMU whose modelDescription.xml gives other values to the attributes (what a
+    hostile or careless exporter could write, or capabilities it claims; the binary finds its code
+    by modelIdentifier), as the file `name` in `folder`."""
+    copy = folder / name
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(copy, "w") as target:
+        for item in source.infolist():
+            data = source.read(item)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                for attribute, value in attributes.items():
+                    start = text.index(f' {attribute}="') + len(f' {attribute}="')
+                    text = text[:start] + value + text[text.index('"', start):]
+                data = text.encode()
+            target.writestr(item, data)
+    return copy

@@ -3,7 +3,6 @@ sewfmu's: checked against its modelDescription when the file is read, its connec
 through the FMI unit definitions or refused, and its results the ones fmpy's own simulate_fmu
 and a hand computation give. The FMUs are made here, not by sewfmu (tests/foreign_fmus.py)."""
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from fmpy import simulate_fmu
 
 import sewfmu
 from sewfmu.scenarios.format.scenario import Connection, Instance
-from tests.foreign_fmus import build_gain, build_gain3, build_motor
+from tests.foreign_fmus import build_gain, build_gain3, build_motor, rewritten
 
 STEP, STOP = 1e-4, 0.08
 
@@ -176,31 +175,13 @@ def test_a_foreign_fmu_is_checked_and_refused_in_one_line(tmp_path, gain_fmu, ch
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
-def _with_capabilities(fmu: Path, folder: Path, **capabilities) -> Path:
-    """A copy of an FMU whose modelDescription declares other co-simulation capabilities."""
-    import re
-    import zipfile
-
-    out = folder / fmu.name
-    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(out, "w") as dst:
-        for item in src.infolist():
-            data = src.read(item)
-            if item.filename == "modelDescription.xml":
-                text = data.decode()
-                for name, value in capabilities.items():
-                    text = re.sub(rf'{name}="\w+"', f'{name}="{value}"', text)
-                data = text.encode()
-            dst.writestr(item, data)
-    return out
-
-
 @pytest.mark.parametrize("master, capability, said", [
     ("adaptive", "canGetAndSetFMUstate", "cannot save and restore its state"),
     ("adaptive", "canHandleVariableCommunicationStepSize", "takes only steps of one size"),
 ])
 def test_an_fmu_is_not_asked_for_what_it_declares_it_cannot_do(tmp_path, gain_fmu, master,
                                                                 capability, said):
-    _with_capabilities(gain_fmu, tmp_path, **{capability: "false"})
+    rewritten(gain_fmu, tmp_path, "Gain.fmu", **{capability: "false"})
     (tmp_path / "s.toml").write_text(GAIN_SCENARIO.format(**WITH_GAIN))
     with pytest.raises(sewfmu.CosimError) as err:
         sewfmu.run(tmp_path / "s.toml", set={"experiment.master": master})

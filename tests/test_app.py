@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import sewfmu
+from tests.processes import processes_in
 
 pytest.importorskip("dash", reason="the extra app (pip install -e '.[app]') is not installed")
 
@@ -298,20 +299,6 @@ def test_report_html_is_made_into_the_run_s_folder_when_asked_for(tmp_path):
         jobs.shutdown()
 
 
-def _group(pgid: int) -> list[int]:
-    from pathlib import Path
-
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[2]) == pgid and fields[0] != "Z":
-            found.append(int(stat.parent.name))
-    return found
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads Linux's /proc")
 def test_cancel_of_a_sweep_ends_its_workers_too(tmp_path):
     jobs = Jobs(tmp_path)
@@ -321,13 +308,13 @@ def test_cancel_of_a_sweep_ends_its_workers_too(tmp_path):
                                       "grid": grid, "workers": 2, "points": [0] * 4})
         job = jobs.get(job_id)
         end = time.monotonic() + 60
-        while len(_group(job.process.pid)) < 3:        # the job, its fork server, a worker
+        while len(processes_in("group", job.process.pid)) < 3:    # the job, its fork server, a worker
             assert time.monotonic() < end and job.status == "running", job.error
             time.sleep(0.1)
         assert jobs.cancel(job_id) and job.status == "cancelled"
         end = time.monotonic() + 30
-        while _group(job.process.pid) and time.monotonic() < end:
+        while processes_in("group", job.process.pid) and time.monotonic() < end:
             time.sleep(0.1)
-        assert _group(job.process.pid) == []
+        assert processes_in("group", job.process.pid) == []
     finally:
         jobs.shutdown()

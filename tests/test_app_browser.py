@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 import sewfmu
+from tests.processes import processes_in
 
 pytestmark = pytest.mark.slow
 webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed "
@@ -282,19 +283,6 @@ def test_the_sweep_panel_plots_a_figure_against_a_value(page):
     assert trace["y"][1] == pytest.approx(want.figures["F2_weld_mean"], rel=1e-9)
 
 
-def _session(sid: int) -> list[int]:
-    """The processes of a session (every process the server started stays in it)."""
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[3]) == sid and fields[0] != "Z":
-            found.append(int(stat.parent.name))
-    return found
-
-
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux's /proc")
 def test_sigterm_ends_the_server_and_every_run(browser, tmp_path):
     process, url = start_server(tmp_path)
@@ -305,18 +293,18 @@ def test_sigterm_ends_the_server_and_every_run(browser, tmp_path):
         browser.find_element(By.ID, "run").click()
         status = browser.find_element(By.ID, "status")
         wait(browser, lambda: "%" in status.text)
-        assert len(_session(process.pid)) >= 2          # the server and the run's process
+        assert len(processes_in("session", process.pid)) >= 2          # the server and the run's process
     finally:
         code = stop_server(process)
     assert code == 0, process.stderr.read()
     # the fork server and multiprocessing's resource tracker end when they read the end of
     # their pipes: after the server, soon
     end = time.monotonic() + 30
-    while [pid for pid in _session(process.pid) if pid != process.pid] and \
+    while [pid for pid in processes_in("session", process.pid) if pid != process.pid] and \
             time.monotonic() < end:
         time.sleep(0.2)
     left = {pid: Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ")[:120]
-            for pid in _session(process.pid) if pid != process.pid}
+            for pid in processes_in("session", process.pid) if pid != process.pid}
     assert not left, left
     assert not list(tmp_path.glob("sewfmu_app_*")), "the results folder was left behind"
 

@@ -9,7 +9,6 @@ original's."""
 import math
 import shutil
 import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +28,7 @@ from sewfmu.scenarios.references.reference_files import (
     parse_options,
     plain_name,
 )
+from tests.foreign_fmus import rewritten
 
 GOOD = "time,x,y\n0,1,2\n0.5,1.5,2.5\n1,2,3\n"
 
@@ -396,23 +396,6 @@ def test_a_damaged_recorded_reference_is_refused(fmu_paths, recorded, damage, fr
     _refused(lambda: reference_check.check(fmu_paths["Fabric"], recorded), str(result), fragment)
 
 
-def _rewritten(fmu: Path, folder: Path, **attributes: str) -> Path:
-    """A copy of the FMU whose modelDescription.xml gives other values to the attributes (what a
-    hostile or careless exporter could write; the binary finds its code by modelIdentifier)."""
-    copy = folder / "Rewritten.fmu"
-    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(copy, "w") as target:
-        for item in source.infolist():
-            data = source.read(item)
-            if item.filename == "modelDescription.xml":
-                text = data.decode()
-                for name, value in attributes.items():
-                    start = text.index(f' {name}="') + len(f' {name}="')
-                    text = text[:start] + value + text[text.index('"', start):]
-                data = text.encode()
-            target.writestr(item, data)
-    return copy
-
-
 @pytest.mark.parametrize("model_name", ["../../escaped", "{outside}/abs", "..", "a/b"])
 def test_a_model_name_never_leads_a_recording_out_of_the_folder(fmu_paths, tmp_path, capsys,
                                                                 model_name):
@@ -420,7 +403,7 @@ def test_a_model_name_never_leads_a_recording_out_of_the_folder(fmu_paths, tmp_p
     refs = work / "a" / "refs"
     refs.mkdir(parents=True)
     outside.mkdir()
-    fmu = _rewritten(fmu_paths["Fabric"], tmp_path, modelName=model_name.format(outside=outside))
+    fmu = rewritten(fmu_paths["Fabric"], tmp_path, modelName=model_name.format(outside=outside))
     assert main(["references", "--fmu", str(fmu), "--refs", str(refs), "--regenerate"]) == 1
     error = capsys.readouterr().err.strip()
     assert len(error.splitlines()) == 1 and "is not a plain file name" in error, error
@@ -449,6 +432,6 @@ def test_a_recording_through_a_link_out_of_the_folder_is_refused(fmu_paths, tmp_
 def test_a_default_experiment_that_cannot_run_is_refused_before_recording(fmu_paths, tmp_path,
                                                                           attributes, fragment):
     # another modelName: not one of sewfmu's, so its DefaultExperiment is what is recorded
-    fmu = _rewritten(fmu_paths["Fabric"], tmp_path, modelName="Other", **attributes)
+    fmu = rewritten(fmu_paths["Fabric"], tmp_path, modelName="Other", **attributes)
     _refused(lambda: reference_check.record(fmu, tmp_path / "refs"), str(fmu), fragment)
     assert not (tmp_path / "refs").exists()
