@@ -11,7 +11,7 @@ internal (docs/architecture.md).
 import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first: see scenarios()
 from sewfmu._version import __version__
 
-__all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "parameters",
+__all__ = ["__version__", "run", "sweep", "compare", "load", "check", "build", "show", "parameters",
            "scenarios",
            "Run", "Sweep", "Scenario", "Instance", "Connection", "Error", "ScenarioError",
            "CosimError", "OutputError",
@@ -19,7 +19,7 @@ __all__ = ["__version__", "run", "sweep", "compare", "load", "build", "show", "p
 
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
-_HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "build", "show",
+_HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "check", "build", "show",
                                             "parameters", "Run", "Sweep", "Scenario", "ScenarioError",
                                             "InaccurateRun")},
          "Error": "sewfmu.errors",

@@ -27,7 +27,7 @@ from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, plain
 
-__all__ = ["load", "run", "sweep", "compare", "build", "show", "parameters", "scenarios", "Run",
+__all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "scenarios", "Run",
            "Sweep", "Scenario", "ScenarioError"]
 
 
@@ -55,6 +55,17 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
                             f"{type(set).__name__}")
     for target, value in (set or {}).items():
         loaded.set_value(str(target), value, origin="set")
+    return loaded
+
+
+def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
+    """load(), then every value checked as a run checks it before its first step (each against
+    its FMU's declared type and range, an input fed by a connection refused), nothing run: the
+    Scenario, or a ScenarioError naming the first bad value."""
+    from sewfmu.scenarios.cosim.system import check_values  # loaded on first use (start-up time)
+
+    loaded = load(scenario, set)
+    check_values(loaded)
     return loaded
 
 

@@ -260,8 +260,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
               progress: bool = True, on_point=None) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order.
     `on_point(row)`, if given, hears of each row as it is logged."""
-    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
-    from sewfmu.scenarios.cosim.system import check_parameters  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.system import check_values  # loaded on first use (start-up time)
     from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
@@ -273,8 +272,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         probe = scenario.copy()
         for target, value in point.values:
             probe.set_value(target, value, origin=f"{scenario.source}: sweep")
-        check_parameters(probe, {inst.name: extracted_fmu(Path(paths[inst.fmu]))[1]
-                                 for inst in probe.instances.values()})
+        check_values(probe, paths)
     out_dir.mkdir(parents=True, exist_ok=True)
     with held(out_dir):         # its record is this sweep's alone while it runs
         remove_debris(out_dir, recursive=True)

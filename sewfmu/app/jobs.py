@@ -5,8 +5,10 @@ read only the jobs whose ids it was given.
 
 Processes come from a fork server that has loaded the API once (multiprocessing's forkserver
 context), so that a run starts in milliseconds and not in the seconds of importing numpy and
-fmpy; where there is none (not Linux), from spawn. Cancel ends the job's process group: a
-sweep's workers with it."""
+fmpy; where there is none (not Linux), from spawn. A run's process is kept ready before its run
+(a spare, warmed on the scenario run last: worker.standby), and the next one made when that run
+ends, so that only a warm run stands between Run and the figures. Cancel ends the job's process
+group: a sweep's workers with it."""
 from __future__ import annotations
 
 import multiprocessing
@@ -20,6 +22,7 @@ from pathlib import Path
 
 import sewfmu
 from sewfmu.app.worker import main as work
+from sewfmu.app.worker import standby
 
 ENDING = 3.0            # s a job's process is given after SIGTERM before SIGKILL
 # jobs running at once, over all tabs and clients: more would only share the cores (a sweep uses
@@ -65,21 +68,44 @@ def _context():
 
 
 class Jobs:
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, warm: str | None = None):
         self.root = Path(root)
         self._jobs: dict[str, Job] = {}
         self._lock = threading.Lock()
         self._ctx = _context()
         self._closed = False
+        self._spare = None              # (process, pipe) of the run process kept ready
+        if warm is not None:
+            threading.Thread(target=self.prepare, args=(warm,), daemon=True,
+                             name="spare").start()
+
+    def prepare(self, warm: str) -> None:
+        """A run's process ready for the next run, warmed on the scenario `warm`, unless one is."""
+        with self._lock:
+            if self._closed or (self._spare is not None and self._spare[0].is_alive()):
+                return
+            here, there = self._ctx.Pipe()
+            process = self._ctx.Process(target=standby, args=(warm, there),
+                                        name="sewfmu-app-spare")
+            process.start()
+            self._spare = (process, here)
+        there.close()
+
+    def _take_spare(self):
+        """The ready process and its pipe (the caller holds the lock), or None."""
+        spare, self._spare = self._spare, None
+        if spare is not None and spare[0].is_alive():
+            return spare
+        if spare is not None:
+            spare[1].close()
+            spare[0].join(0)
+        return None
 
     def start(self, kind: str, request: dict, folder: str | None = None) -> str:
         """A new job; its files under root/<its id>, or root/<folder> (a run's report)."""
         job_id = secrets.token_hex(8)
         job = Job(job_id, kind, request, total=len(request.get("points", [])) or 0)
-        receive, send = self._ctx.Pipe(duplex=False)
-        process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
-                                    args=(kind, request, str(self.root / (folder or job_id)),
-                                          send))
+        where = str(self.root / (folder or job_id))
         with self._lock:
             if self._closed:
                 raise RuntimeError("the app is ending")
@@ -87,10 +113,17 @@ class Jobs:
             if running >= MAX_RUNNING:
                 raise Busy(f"{running} runs or sweeps are going already, the most this app runs "
                            f"at once: wait for one to end, or Cancel one")
+            spare = self._take_spare() if kind == "run" else None
+            if spare is not None:
+                job.process, receive = spare
+                receive.send((kind, request, where))
+            else:
+                receive, send = self._ctx.Pipe(duplex=False)
+                job.process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
+                                                args=(kind, request, where, send))
+                job.process.start()
+                send.close()
             self._jobs[job_id] = job
-            job.process = process
-            process.start()
-        send.close()
         threading.Thread(target=self._listen, args=(job, receive), daemon=True,
                          name=f"listen-{job_id}").start()
         return job_id
@@ -123,6 +156,8 @@ class Jobs:
             job.status = "error"
             job.error = f"the run's process ended without a result (exit code " \
                         f"{job.process.exitcode})"
+        if job.kind == "run":           # the next run's process, warmed on this scenario
+            self.prepare(job.request["source"])
 
     def cancel(self, job_id) -> bool:
         job = self.get(job_id)
@@ -138,6 +173,11 @@ class Jobs:
         with self._lock:
             self._closed = True
             jobs = list(self._jobs.values())
+            spare, self._spare = self._spare, None
+        if spare is not None:
+            _kill_group(spare[0].pid, signal.SIGKILL)    # it holds no run: nothing half-written
+            spare[0].join(ENDING)
+            spare[1].close()
         for job in jobs:
             if job.process is not None and not job.ended.is_set():
                 if job.status == "running":

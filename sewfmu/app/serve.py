@@ -14,6 +14,7 @@ import webbrowser
 from pathlib import Path
 
 import dash
+from dash.exceptions import DependencyException
 from flask import abort, send_file
 from werkzeug.serving import WSGIRequestHandler, make_server
 
@@ -34,7 +35,8 @@ class Page:
                  workers: int | None = None):
         self.choices = choices                # label on the page -> catalogue name or path
         self.root = root
-        self.jobs = Jobs(root)
+        # the first run's process made ready now, on the scenario the page shows first
+        self.jobs = Jobs(root, warm=next(iter(choices.values()), None))
         self.scheduler = scheduler
         self.workers = workers
         self._lock = threading.Lock()
@@ -89,6 +91,12 @@ def create(page: Page) -> dash.Dash:
     first = next(iter(page.choices), None)
     app.layout = page_layout(list(page.choices), values_of_choice(page, first))
     register(app, page)
+
+    @app.server.errorhandler(DependencyException)
+    def not_a_dependency(_error):
+        # Dash's route for its own scripts, asked for a path that is not one (a traversal, an
+        # unknown package): Dash raises, which Flask would answer 500 with a traceback
+        return "not found", 404
 
     @app.server.route("/runs/<run_id>/<name>")
     def result(run_id, name):

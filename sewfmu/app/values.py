@@ -1,6 +1,6 @@
 """The values a user types on the page, read as the command line reads `--set`: a TOML scalar
 (a number, true or false, a quoted string) or else the text itself ("955 rpm"), then given to
-`sewfmu.load(scenario, set=...)`, whose refusal (one line, a sewfmu.Error) is what the page
+`sewfmu.check(scenario, set=...)`, whose refusal (one line, a sewfmu.Error) is what the page
 shows. Also what reproduces a run: its command line and its scenario as TOML."""
 from __future__ import annotations
 
@@ -64,7 +64,8 @@ def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str])
         if not text:
             raise _error(f"{name}: give a value (its scenario's is {defaults.get(name)})")
         changed[name] = text
-    sewfmu.load(source, set={name: value_of(text) for name, text in changed.items()})
+    # as a run checks them before its first step (declared ranges too): a bad value starts nothing
+    sewfmu.check(source, set={name: value_of(text) for name, text in changed.items()})
     return changed
 
 
