@@ -318,3 +318,87 @@ def test_cancel_of_a_sweep_ends_its_workers_too(tmp_path):
         assert processes_in("group", job.process.pid) == []
     finally:
         jobs.shutdown()
+
+
+def test_a_value_outside_its_declared_range_starts_nothing(tmp_path):
+    """Refused when Run is clicked, with the range the FMU declares, as a run would refuse it:
+    not a job that starts and then fails."""
+    from sewfmu.app.serve import Page
+
+    page = Page({"punch_drive": "punch_drive"}, tmp_path)
+    try:
+        defaults = _defaults()
+        for name, text in (("punch.c2", "-5"), ("shaft.omega0", "1e6 rpm")):
+            with pytest.raises(sewfmu.ScenarioError, match="outside the range") as bad:
+                page.check("punch_drive", {**defaults, name: text}, defaults)
+            assert name in str(bad.value) and "\n" not in str(bad.value)
+        assert page.jobs._jobs == {}
+    finally:
+        page.jobs.shutdown()
+
+
+def test_dash_s_script_route_answers_a_path_that_is_not_one_with_404(tmp_path):
+    """Dash raises on a traversal or an unknown package under its script route; Flask would
+    answer 500 with a traceback on the terminal."""
+    from sewfmu.app.serve import Page, create
+
+    page = Page({"punch_drive": "punch_drive"}, tmp_path)
+    try:
+        client = create(page).server.test_client()
+        for path in ("/_dash-component-suites/dash/..%2f..%2f..%2fetc%2fpasswd",
+                     "/_dash-component-suites/dash/deps/..%2f..%2fsetup.py",
+                     "/_dash-component-suites/nothing/x.js",
+                     "/assets/..%2f..%2fetc%2fpasswd"):
+            answer = client.get(path)
+            assert answer.status_code == 404, path
+            assert b"root:" not in answer.data
+    finally:
+        page.jobs.shutdown()
+
+
+def test_a_run_goes_to_the_process_made_ready_for_it_and_gives_the_api_s_figures(tmp_path):
+    """The spare process (warmed on the scenario) takes the first run; the next spare is made
+    when that run ends; the figures are sewfmu.run's; shutdown ends the spare too."""
+    jobs = Jobs(tmp_path, warm="punch_drive")
+    try:
+        end = time.monotonic() + 60
+        while jobs._spare is None:
+            assert time.monotonic() < end
+            time.sleep(0.02)
+        spare = jobs._spare[0]
+        first = jobs.start("run", _request({**SHORT, "shaft.omega0": "955 rpm"}))
+        assert jobs.get(first).process is spare
+        _wait(jobs, first)
+        job = jobs.get(first)
+        assert job.status == "done", job.error
+        want = sewfmu.run("punch_drive", set={**SHORT, "shaft.omega0": "955 rpm"}).figures
+        got = job.result["variants"][0]["figures"]
+        for key in ("F2_peak", "F2_weld_mean", "contact_onset_deg"):
+            assert got[key] == pytest.approx(want[key], rel=1e-12), key
+        assert job.ended.wait(10)
+        while jobs._spare is None:
+            assert time.monotonic() < end
+            time.sleep(0.02)
+        second = jobs._spare[0]
+        assert second is not spare and second.is_alive()
+    finally:
+        jobs.shutdown()
+    second.join(10)
+    assert not second.is_alive()
+
+
+def test_the_spare_s_warm_up_of_a_study_or_a_bad_file_is_left_to_the_job(tmp_path):
+    """A scenario that cannot be warmed (a study; a file broken after the app started) leaves the
+    spare cold, and the job then says what is wrong in its one line."""
+    broken = tmp_path / "mine.toml"
+    broken.write_text(sewfmu.show("punch_drive"))
+    jobs = Jobs(tmp_path / "runs", warm=str(broken))
+    try:
+        broken.write_text("[experiment\n")
+        job_id = jobs.start("run", {**_request({}), "source": str(broken), "toml": None})
+        _wait(jobs, job_id)
+        job = jobs.get(job_id)
+        assert job.status == "error" and "mine.toml" in job.error and "\n" not in job.error
+        assert values.short_run("takeup_tolerance") is None
+    finally:
+        jobs.shutdown()

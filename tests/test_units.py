@@ -7,6 +7,8 @@ from pathlib import Path
 import pint
 import pytest
 
+import sewfmu
+
 from sewfmu.components.units import UnitError
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.quantities import in_declared_unit
@@ -100,3 +102,29 @@ def test_units_reach_the_scenario_from_every_door(tmp_path):
     assert mine.step == pytest.approx(2.5e-4)
     points = points_of(load("punch_drive"), {"shaft.omega0": ["955 rpm", "100 rad/s"]})
     assert [dict(p.values)["shaft.omega0"] for p in points] == [955 * 2 * math.pi / 60, 100.0]
+
+
+def test_revolutions_take_a_value_with_an_angle_unit(tmp_path):
+    """experiment.revolutions in turns of the shaft: "720 deg" is 2, as a number or "2 rev";
+    a time is refused naming the unit wanted."""
+    assert sewfmu.load("punch_drive", set={"experiment.revolutions": "720 deg"}).revolutions \
+        == pytest.approx(2.0, rel=1e-15)
+    assert sewfmu.load("punch_drive", set={"experiment.revolutions": "3 rev"}).revolutions == 3
+    path = tmp_path / "mine.toml"
+    path.write_text(sewfmu.show("punch_drive").replace("revolutions = 10",
+                                                       'revolutions = "1440 deg"'))
+    assert sewfmu.load(path).revolutions == pytest.approx(4.0, rel=1e-15)
+    with pytest.raises(sewfmu.ScenarioError, match=r"wants an angle \(rev\)"):
+        sewfmu.load("punch_drive", set={"experiment.revolutions": "1 s"})
+
+
+def test_check_refuses_what_a_run_would_refuse_before_its_first_step():
+    """sewfmu.check: the declared range (which load alone does not read), nothing run."""
+    sc = sewfmu.check("punch_drive", set={"punch.c2": "6e4 N/m"})
+    assert sc.instances["punch"].parameters["c2"] == 6e4
+    assert sewfmu.load("punch_drive", set={"punch.c2": -5}).instances["punch"].parameters["c2"] \
+        == -5
+    with pytest.raises(sewfmu.ScenarioError, match=r"punch.c2: parameter c2 = -5 N/m is outside"):
+        sewfmu.check("punch_drive", set={"punch.c2": -5})
+    with pytest.raises(sewfmu.ScenarioError, match="fed by the connection"):
+        sewfmu.check("punch_drive", set={"linkage.phi": 0.0})

@@ -15,7 +15,7 @@ from sewfmu.scenarios.format.values import (
     ScenarioError,
     check_instance_name,
     label_of,
-    positive,
+    positive_in,
     seconds,
     short,
 )
@@ -106,7 +106,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         master=master,
         stop_time=(seconds(exp["stop_time"], f"{source}: experiment.stop_time")
                    if "stop_time" in exp else None),
-        revolutions=(positive(exp["revolutions"], f"{source}: experiment.revolutions")
+        revolutions=(positive_in(exp["revolutions"], "rev", f"{source}: experiment.revolutions")
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
     scenario.fmu_files = files          # set_value reads their declared units

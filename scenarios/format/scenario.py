@@ -14,7 +14,7 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS, parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
-from sewfmu.scenarios.format.values import ScenarioError, plain, positive, seconds, short
+from sewfmu.scenarios.format.values import ScenarioError, plain, positive, positive_in, short
 
 
 @dataclass(frozen=True)
@@ -250,7 +250,7 @@ class Scenario:
                                 f"{did_you_mean(key, EXPERIMENT_KEYS)} "
                                 f"({', '.join(EXPERIMENT_KEYS)})")
         where = f"{origin} experiment.{key}"
-        number = seconds(value, where) if key in ("step", "stop_time") else positive(value, where)
+        number = positive_in(value, "s" if key in ("step", "stop_time") else "rev", where)
         setattr(self, key, number)
         if key == "stop_time":
             self.revolutions = None

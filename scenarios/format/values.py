@@ -66,13 +66,19 @@ def positive(value: Any, where: str) -> float:
 
 def seconds(value: Any, where: str) -> float:
     """A positive time: a number of seconds, or a string with a unit ("0.25 ms")."""
+    return positive_in(value, "s", where)
+
+
+def positive_in(value: Any, unit: str, where: str) -> float:
+    """A positive number in `unit`, or a string with a unit that converts to it ("2 rev",
+    "720 deg" of shaft revolutions)."""
     if isinstance(value, str):
         from sewfmu.components.units import UnitError  # loaded on first use (start-up time)
         from sewfmu.scenarios.format.quantities import in_declared_unit  # pint: on first use
         # where ends with the key ("file: experiment.step"); the message names the key itself
         origin, _, key = where.rpartition(" ")
         try:
-            value = in_declared_unit(value, "s", key)
+            value = in_declared_unit(value, unit, key)
         except UnitError as err:
             raise ScenarioError(f"{origin} {err}" if origin else str(err)) from None
     return positive(value, where)

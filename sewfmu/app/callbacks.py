@@ -14,11 +14,14 @@ from dash import ALL, Input, Output, State, ctx, html
 import sewfmu
 from sewfmu.app.drawing import mechanism_figure, series_figure, sweep_figure
 from sewfmu.app.files import present
-from sewfmu.app.layout import FRAME_DEG, figures, runs_table, value_inputs
+from sewfmu.app.layout import FRAME_DEG, POLL_MS, figures, runs_table, value_inputs
 from sewfmu.app.values import value_of
 
 NOT = dash.no_update
 MAX_POINTS = 400          # a sweep's points from the page (a larger one: `sewfmu sweep`)
+# s a progress request waits for the job to end: its end reaches the page at once, not at the
+# next poll (kept under the poll's interval, so that requests do not pile up)
+SETTLING = 0.8 * POLL_MS / 1000
 
 
 def register(app, page) -> None:
@@ -66,6 +69,8 @@ def register(app, page) -> None:
         if which == "cancel":
             page.jobs.cancel(job_id)
             return None, True, 0, "cancelled", "", NOT
+        if which == "poll":     # answered as soon as the job ends, not at the next poll
+            job.settled.wait(SETTLING)
         if job.status == "running":
             return NOT, False, job.fraction, f"running… {100 * job.fraction:.0f} %", NOT, NOT
         if job.status == "done":

@@ -50,6 +50,7 @@ class Job:
     started: float = field(default_factory=time.monotonic)
     finished: float | None = None
     ended: threading.Event = field(default_factory=threading.Event)   # its process is gone
+    settled: threading.Event = field(default_factory=threading.Event)  # its result or error is in
 
     @property
     def fraction(self) -> float:
@@ -146,9 +147,11 @@ class Jobs:
                 job.done = len(job.points)
             elif what == "done":
                 job.result, job.status, job.finished = body[0], "done", time.monotonic()
+                job.settled.set()
             elif what == "error":
                 if job.status != "cancelled":
                     job.error, job.status = body[0], "error"
+                job.settled.set()
         conn.close()
         job.process.join()              # here only: one thread waits for a process
         job.ended.set()
@@ -156,6 +159,7 @@ class Jobs:
             job.status = "error"
             job.error = f"the run's process ended without a result (exit code " \
                         f"{job.process.exitcode})"
+        job.settled.set()
         if job.kind == "run":           # the next run's process, warmed on this scenario
             self.prepare(job.request["source"])
 

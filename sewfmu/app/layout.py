@@ -9,7 +9,7 @@ from dash import dcc, html
 
 from sewfmu.app.values import inputs_of
 
-POLL_MS = 150            # how often a running job's progress is asked for
+POLL_MS = 500            # how often a running job's progress is asked for
 TICK_MS = 250            # the animation's frame time when playing
 FRAME_DEG = 10           # the animation's frames: every 10° of the last revolution
 
@@ -76,9 +76,10 @@ def value_inputs(source: str) -> tuple[list, dict]:
     cells = []
     for row in rows:
         hint = " ".join(p for p in (row["unit"] and f"[{row['unit']}]", row["range"]) if p)
+        # three components a value, not five: the page's script does work for each component
+        # at every update (a run's progress among them)
         cells.append(html.Div(className="value", **{"data-param": row["name"]}, children=[
-            html.Span([html.B(row["name"]), " ", html.Span(hint, className="unit")],
-                      title=row["meaning"]),
+            html.Label(f"{row['name']} {hint}".strip(), title=row["meaning"]),
             dcc.Input(id={"type": "value", "name": row["name"]}, name=row["name"], type="text",
                       value=row["value"], debounce=False, autoComplete="off",
                       className="input")]))

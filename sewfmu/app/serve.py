@@ -23,7 +23,7 @@ from sewfmu.app.callbacks import register, values_of_choice
 from sewfmu.app.files import result_file
 from sewfmu.app.jobs import Jobs
 from sewfmu.app.layout import page as page_layout
-from sewfmu.app.values import changed_values, command_line
+from sewfmu.app.values import changed_values, command_line, short_run
 
 ASSETS = Path(__file__).resolve().parent / "assets"
 
@@ -37,6 +37,9 @@ class Page:
         self.root = root
         # the first run's process made ready now, on the scenario the page shows first
         self.jobs = Jobs(root, warm=next(iter(choices.values()), None))
+        first = next(iter(choices.values()), None)
+        if first is not None:         # the first check of a value (FMUs' descriptions, units)
+            threading.Thread(target=_warm_checks, args=(first,), daemon=True).start()
         self.scheduler = scheduler
         self.workers = workers
         self._lock = threading.Lock()
@@ -83,6 +86,17 @@ class Page:
         if job is None or job.result is None:
             return {"series": {}, "units": {}, "figures": {}, "mechanism": None}
         return job.result["variants"][entry["variant"]]
+
+
+def _warm_checks(source: str) -> None:
+    """A value checked once, as a click on Run checks the user's: the first click then answers
+    at once (reading the FMUs' descriptions and building the unit registry take about a second)."""
+    try:
+        short = short_run(source)
+        if short is not None:
+            sewfmu.check(source, set=short)
+    except Exception:           # a scenario that cannot be checked so: its first click says why
+        pass
 
 
 def create(page: Page) -> dash.Dash:

@@ -53,6 +53,19 @@ def inputs_of(source: str) -> list[dict]:
     return rows
 
 
+def short_run(source: str) -> dict | None:
+    """The values that make a scenario's run short (one revolution, or ten steps), given with
+    their units so that reading them loads the units too: a run or a check of them warms a
+    process (its FMUs loaded, its unit registry built) before the user's own. None for a
+    scenario that is computed rather than run (a study)."""
+    scenario = sewfmu.load(source)
+    if scenario.study is not None:
+        return None
+    if scenario.revolutions is not None:
+        return {"experiment.revolutions": f"{min(scenario.revolutions, 1)!r} rev"}
+    return {"experiment.stop_time": f"{min(scenario.stop_time, 10 * scenario.step)!r} s"}
+
+
 def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str]) -> dict:
     """The values typed that differ from the scenario's, checked by loading the scenario with
     them: {name: text}. A bad one raises sewfmu.Error with its one line."""

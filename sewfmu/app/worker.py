@@ -29,7 +29,7 @@ import pythonfmu.fmi2slave  # noqa: F401
 import pythonfmu3.fmi3slave  # noqa: F401
 
 import sewfmu
-from sewfmu.app.values import command_line, scenario_toml, value_of
+from sewfmu.app.values import command_line, scenario_toml, short_run, value_of
 
 _API = (sewfmu.run, sewfmu.sweep)     # the API loaded in the fork server, before any job
 PROGRESS_EVERY = 0.15          # s between progress messages
@@ -57,20 +57,17 @@ def standby(warm: str | None, conn) -> None:
 
 
 def _warm_up(source: str | None) -> None:
-    """A short run of the scenario, nothing written: its FMUs loaded and initialized once.
-    A scenario that cannot run so (a study, a bad file) is left cold: its job says why."""
+    """A short run of the scenario, nothing written: its FMUs loaded and initialized once, the
+    unit registry built. A scenario that cannot run so (a study, a bad file) is left cold: its
+    job says why."""
     if source is None:
         return
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            scenario = sewfmu.load(source)
-            if scenario.study is not None:
-                return
-            short = {"experiment.revolutions": min(scenario.revolutions, 1)} \
-                if scenario.revolutions is not None else \
-                {"experiment.stop_time": min(scenario.stop_time, 10 * scenario.step)}
-            sewfmu.run(scenario, set=short)
+            short = short_run(source)
+            if short is not None:
+                sewfmu.run(source, set=short)
     except Exception:
         pass
 
