@@ -22,7 +22,6 @@ from selenium.webdriver.support.ui import WebDriverWait
 
 import sewfmu
 
-
 # what a user's machine does: Python keeps the bytecode it compiles (the server's side too)
 ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 # s between two clicks on Run, as a user reading the figures takes: the next run's process is made

@@ -8,7 +8,6 @@ import pint
 import pytest
 
 import sewfmu
-
 from sewfmu.components.units import UnitError
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.quantities import in_declared_unit
