@@ -402,3 +402,25 @@ def test_the_spare_s_warm_up_of_a_study_or_a_bad_file_is_left_to_the_job(tmp_pat
         assert values.short_run("takeup_tolerance") is None
     finally:
         jobs.shutdown()
+
+
+def test_a_study_on_the_page_gives_its_figures_and_study_json(tmp_path):
+    """The catalogue's studies are on the page too: computed (no series, no drawing), their key
+    figures those of sewfmu.run with the same value, study.json served beside summary.json."""
+    jobs = Jobs(tmp_path)
+    try:
+        request = {**_request({"takeup.L_AB": "10.5 mm"}), "source": "takeup_tolerance",
+                   "scenario": "takeup_tolerance", "toml": sewfmu.show("takeup_tolerance")}
+        job_id = jobs.start("run", request)
+        _wait(jobs, job_id)
+        job = jobs.get(job_id)
+        assert job.status == "done", job.error
+        variant = job.result["variants"][0]
+        want = sewfmu.run("takeup_tolerance", set={"takeup.L_AB": "10.5 mm"})
+        assert variant["figures"]["nominal_stroke_mm"] == \
+            pytest.approx(want.figures["nominal_stroke_mm"], rel=1e-12)
+        assert variant["series"] == {} and variant["mechanism"] is None
+        assert sorted(files.present(tmp_path, job_id)) == \
+            ["command.txt", "scenario.toml", "study.json", "summary.json"]
+    finally:
+        jobs.shutdown()

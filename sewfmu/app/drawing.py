@@ -17,6 +17,9 @@ def series_figure(shown: list[tuple[str, dict]], columns: list[str], cursor_deg:
     columns = columns or []
     if not shown:
         return _empty(go.Figure(), "run the scenario, or tick runs,<br>to plot what they recorded")
+    if not any(variant["series"] for _, variant in shown):
+        return _empty(go.Figure(), "a study is computed from the values, not run:<br>no series "
+                                   "to plot (its key figures are above)")
     fig = make_subplots(rows=max(1, len(columns)), cols=1, shared_xaxes=True,
                         vertical_spacing=0.06)
     for row, column in enumerate(columns, start=1):

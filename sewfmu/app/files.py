@@ -5,7 +5,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-FILES = ("results.csv", "summary.json", "report.html", "scenario.toml", "command.txt")
+# study.json: what a study scenario (computed, not co-simulated) gives instead of results.csv
+FILES = ("results.csv", "summary.json", "study.json", "report.html", "scenario.toml",
+         "command.txt")
 RUN_ID = re.compile(r"[0-9a-f]{16}")     # secrets.token_hex(8), as jobs.py makes them
 
 

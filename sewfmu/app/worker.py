@@ -29,6 +29,7 @@ import pythonfmu.fmi2slave  # noqa: F401
 import pythonfmu3.fmi3slave  # noqa: F401
 
 import sewfmu
+from sewfmu.app.files import FILES
 from sewfmu.app.values import command_line, scenario_toml, short_run, value_of
 
 _API = (sewfmu.run, sewfmu.sweep)     # the API loaded in the fork server, before any job
@@ -113,7 +114,7 @@ def _run(job: dict, folder: Path, conn) -> None:
     if job.get("toml") is not None:
         (part / "scenario.toml").write_text(scenario_toml(job["toml"], job["changed"]))
     for name in os.listdir(part):          # only the files the page serves, and the pictures
-        if name not in ("results.csv", "summary.json", "command.txt", "scenario.toml"):
+        if name not in FILES or name == "report.html":
             _remove(part / name)
     os.replace(part, folder)
     conn.send(("done", {"variants": [_variant(label, r) for label, r in
@@ -132,7 +133,12 @@ def _report(job: dict, folder: Path, conn) -> None:
 
 
 def _variant(label: str, run) -> dict:
-    """What the page shows of one run: key figures, the last revolution's series, the drawing."""
+    """What the page shows of one run: key figures, the last revolution's series, the drawing
+    (a study, computed rather than co-simulated: its figures alone)."""
+    if run.series is None:
+        return {"label": label, "figures": {k: _number(v) for k, v in run.figures.items()},
+                "units": {k: run.units.get(k, "") for k in run.figures}, "series": {},
+                "mechanism": None}
     turn = run.revolution(-1)
     every = max(1, math.ceil(len(turn) / MAX_POINTS))
     series = {name: _numbers(turn[name][::every]) for name in turn.dtype.names}
