@@ -62,7 +62,7 @@ def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None)
     """load(), then every value checked as a run checks it before its first step (each against
     its FMU's declared type and range, an input fed by a connection refused), nothing run: the
     Scenario, or a ScenarioError naming the first bad value."""
-    from sewfmu.scenarios.cosim.system import check_values  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
 
     loaded = load(scenario, set)
     check_values(loaded)

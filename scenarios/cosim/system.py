@@ -126,17 +126,6 @@ def check_parameters(scenario: Scenario, descriptions: dict) -> None:
                                     f"{inst.name} ({md.modelName}) declares{hint}")
 
 
-def check_values(scenario: Scenario, paths: dict | None = None) -> None:
-    """check_parameters before a run, from the modelDescriptions of the scenario's FMU files
-    (built first if out of date; `paths`: FMU name -> file, when the caller has them)."""
-    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
-
-    paths = paths or fmus_for(scenario)
-    check_parameters(scenario, {inst.name: extracted_fmu(Path(paths[inst.fmu]))[1]
-                                for inst in scenario.instances.values()})
-
-
 def _unit_hint(unit: str | None, value: float) -> str:
     """How a value out of range may have been meant: with the unit users think in."""
     from sewfmu.components.units import DISPLAY_UNITS  # loaded on first use (start-up time)

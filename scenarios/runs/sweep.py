@@ -260,8 +260,8 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
               progress: bool = True, on_point=None) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order.
     `on_point(row)`, if given, hears of each row as it is logged."""
-    from sewfmu.scenarios.cosim.system import check_values  # loaded on first use (start-up time)
     from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 1):

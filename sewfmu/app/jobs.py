@@ -116,9 +116,13 @@ class Jobs:
                            f"at once: wait for one to end, or Cancel one")
             spare = self._take_spare() if kind == "run" else None
             if spare is not None:
-                job.process, receive = spare
-                receive.send((kind, request, where))
-            else:
+                try:
+                    spare[1].send((kind, request, where))
+                    job.process, receive = spare
+                except OSError:             # it ended meanwhile (killed from outside)
+                    spare[1].close()
+                    spare = None
+            if spare is None:
                 receive, send = self._ctx.Pipe(duplex=False)
                 job.process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
                                                 args=(kind, request, where, send))
