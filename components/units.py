@@ -51,13 +51,20 @@ class UnitError(ValueError):
     """A value whose unit does not fit the quantity it is given for."""
 
 
+def quoted(text: str, longest: int = 60) -> str:
+    """A typed text for a message: quoted, a long one cut, so that the message still ends with
+    what is wrong (a page shows the first few hundred characters of it)."""
+    return repr(text) if len(text) <= longest else \
+        f"{text[:longest - 20]!r}...{text[-8:]!r} ({len(text)} characters)"
+
+
 def in_unit(text: str, unit: str) -> float:
     """A value written with its unit ("110 deg", "955 rpm", "63 g", "0.5") in `unit`, converted
     by the display units above. Raises UnitError saying which units fit."""
     match = _VALUE_WITH_UNIT.match(text)
     if match is None:
         raise UnitError(f"must be a number, or a number with its unit like \"110 deg\"; got "
-                        f"{text!r}")
+                        f"{quoted(text)}")
     value, given = float(match.group(1)), match.group(2)
     given = given.strip()
     if given in ("", unit):
@@ -65,7 +72,7 @@ def in_unit(text: str, unit: str) -> float:
     factors = DISPLAY_UNITS.get(unit, {})
     if given not in factors:
         fitting = ", ".join([unit or "1", *factors])
-        raise UnitError(f"{text!r}: {given!r} is not a unit of this {unit} value "
+        raise UnitError(f"{quoted(text)}: {quoted(given)} is not a unit of this {unit} value "
                         f"(units that fit: {fitting})")
     return value / factors[given]
 

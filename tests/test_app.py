@@ -424,3 +424,25 @@ def test_a_study_on_the_page_gives_its_figures_and_study_json(tmp_path):
             ["command.txt", "scenario.toml", "study.json", "summary.json"]
     finally:
         jobs.shutdown()
+
+
+def test_under_runs_only_a_run_s_file_is_answered_the_rest_is_404(tmp_path):
+    """Dash answers any other path with the page itself; under /runs/ that read as a file."""
+    from sewfmu.app.serve import Page, create
+
+    page = Page({"punch_drive": "punch_drive"}, tmp_path)
+    try:
+        client = create(page).server.test_client()
+        for path in ("/runs/", "/runs/0123456789abcdef/", "/runs/0123456789abcdef/results.csv/",
+                     "/runs/../../etc/passwd", "/runs/a/b/c"):
+            assert client.get(path).status_code == 404, path
+        assert client.get("/").status_code == 200
+    finally:
+        page.jobs.shutdown()
+
+
+def test_a_number_typed_as_the_scenario_has_it_is_no_change():
+    defaults = _defaults()
+    typed = {**defaults, "shaft.omega0": "100.0", "experiment.revolutions": "10.0"}
+    assert defaults["shaft.omega0"] == "100"
+    assert values.changed_values("punch_drive", typed, defaults) == {}

@@ -127,3 +127,35 @@ def test_check_refuses_what_a_run_would_refuse_before_its_first_step():
         sewfmu.check("punch_drive", set={"punch.c2": -5})
     with pytest.raises(sewfmu.ScenarioError, match="fed by the connection"):
         sewfmu.check("punch_drive", set={"linkage.phi": 0.0})
+
+
+@pytest.mark.parametrize("name, value, says", [
+    ("punch.c2", 0, "must be > 0 N/m"),              # inside the declared [0, 1e9], refused
+    ("shaft.omega0", 0, "must be > 0 rad/s"),        # by the FMU when it initializes
+    ("linkage.L_AB", 0, "must be > 0 m"),
+    ("experiment.step", "1e-30 s", "makes more than 1e18 steps"),
+])
+def test_check_refuses_what_the_fmu_s_initialization_or_the_steps_would(name, value, says):
+    with pytest.raises(sewfmu.ScenarioError, match=says):
+        sewfmu.check("punch_drive", set={name: value})
+    with pytest.raises(sewfmu.Error, match=says):       # and the run does too, as said
+        sewfmu.run("punch_drive", set={name: value, "experiment.revolutions": 1})
+
+
+def test_an_out_of_range_value_is_shown_with_its_digits_and_a_unit_hint_only_where_it_fits():
+    with pytest.raises(sewfmu.ScenarioError) as fast:
+        sewfmu.check("punch_drive", set={"shaft.omega0": "1e6 rpm"})
+    assert "104719.7551 rad/s is outside" in str(fast.value) and "meant in" not in str(fast.value)
+    with pytest.raises(sewfmu.ScenarioError) as edge:
+        sewfmu.check("punch_drive", set={"shaft.omega0": 2000.0001})
+    assert "2000.0001 rad/s is outside the range [0, 2000]" in str(edge.value)
+    with pytest.raises(sewfmu.ScenarioError, match=r'meant in rpm\? give the unit: "9550 rpm"'):
+        sewfmu.check("punch_drive", set={"shaft.omega0": 9550})
+
+
+def test_a_huge_typed_value_is_cut_in_the_message_which_ends_with_what_is_wrong():
+    with pytest.raises(sewfmu.ScenarioError) as bad:
+        sewfmu.check("punch_drive", set={"punch.F30": "x" * 100_000})
+    message = str(bad.value)
+    assert len(message) < 300 and "(100000 characters)" in message
+    assert message.endswith('must be a number, or a number with its unit like "110 deg"')

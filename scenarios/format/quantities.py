@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 import re
 
-from sewfmu.components.units import UnitError
+from sewfmu.components.units import UnitError, quoted
 
 # what a variable of each of sewfmu's SI units is, for the one-line refusal of a wrong dimension
 KINDS = {
@@ -70,7 +70,7 @@ def split(text: str, target: str = "the value") -> tuple[float, str]:
     """"30 N/mm" -> (30.0, "N/mm"); "0.5" -> (0.5, ""). Raises UnitError for no number."""
     match = _NUMBER_AND_UNIT.match(text)
     if match is None:
-        raise UnitError(f"{target} = {text!r}: must be a number, or a number with its unit like "
+        raise UnitError(f"{target} = {quoted(text)}: must be a number, or a number with its unit like "
                         f"\"110 deg\"")
     return float(match.group(1)), match.group(2) or ""
 
@@ -89,21 +89,21 @@ def in_declared_unit(text: str, unit: str, target: str = "the value") -> float:
     try:
         have = registry.Quantity(number, _pint_spelling(given))
     except Exception:         # pint's parser fails on malformed text in many ways: not a unit
-        raise UnitError(f"{target} = {text!r}: {given!r} is not a unit (e.g. N, kN, lbf, mm, "
+        raise UnitError(f"{target} = {quoted(text)}: {quoted(given)} is not a unit (e.g. N, kN, lbf, mm, "
                         f"in, rpm, rev/s, deg, N/mm, g, ms)") from None
     try:
         want = registry.Unit(_pint_spelling(unit or "1"))
     except Exception:         # another tool's unit string pint cannot read
-        raise UnitError(f"{target} = {text!r}: its FMU declares the unit {unit!r}, which pint "
+        raise UnitError(f"{target} = {quoted(text)}: its FMU declares the unit {unit!r}, which pint "
                         f"does not know; give the number in {unit!r}") from None
-    wrong = UnitError(f"{target} = {text!r}: {given} is {_article(_kind(registry, have.units))}, "
+    wrong = UnitError(f"{target} = {quoted(text)}: {given} is {_article(_kind(registry, have.units))}, "
                       f"{target} wants {_article(_kind(registry, want))} ({unit or '1'})")
     angle_have, angle_want = _has_angle(registry, have.units), _has_angle(registry, want)
     if angle_want and not angle_have and not have.dimensionless:
         if have.units == registry.Unit("1/s") and "hz" not in given.lower():
             # the papers (and this catalogue's descriptions) write ω in s⁻¹ meaning rad/s, while
             # turns per second is rev/s: either reading would be silently wrong for the other
-            raise UnitError(f"{target} = {text!r}: {given} is ambiguous for a rotational speed "
+            raise UnitError(f"{target} = {quoted(text)}: {given} is ambiguous for a rotational speed "
                             f"(ω in s⁻¹ is radians per second; turns per second are rev/s): "
                             f"write \"{number:g} rad/s\" or \"{number:g} rev/s\"")
         have = have * registry.turn          # "300 1/min": turns per minute

@@ -112,6 +112,13 @@ def create(page: Page) -> dash.Dash:
         # unknown package): Dash raises, which Flask would answer 500 with a traceback
         return "not found", 404
 
+    @app.server.route("/runs/")
+    @app.server.route("/runs/<path:_anything>")
+    def not_a_file(_anything=""):
+        # under /runs/ only a run's file by its id and name (below); Dash would answer the rest
+        # with the page itself
+        abort(404)
+
     @app.server.route("/runs/<run_id>/<name>")
     def result(run_id, name):
         path = result_file(page.root, run_id, name)

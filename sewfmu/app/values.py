@@ -72,7 +72,7 @@ def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str])
     changed = {}
     for name, text in typed.items():
         text = "" if text is None else str(text).strip()
-        if text == defaults.get(name):
+        if text == defaults.get(name) or _same_number(text, defaults.get(name)):
             continue
         if not text:
             raise _error(f"{name}: give a value (its scenario's is {defaults.get(name)})")
@@ -80,6 +80,13 @@ def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str])
     # as a run checks them before its first step (declared ranges too): a bad value starts nothing
     sewfmu.check(source, set={name: value_of(text) for name, text in changed.items()})
     return changed
+
+
+def _same_number(text: str, default: str | None) -> bool:
+    """"100.0" typed where the scenario has 100: the same value, not a change to send."""
+    typed, given = value_of(text), value_of(default or "")
+    return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (typed, given)) \
+        and typed == given
 
 
 def _error(line: str) -> Exception:
