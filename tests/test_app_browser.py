@@ -330,9 +330,11 @@ def test_the_server_serves_a_run_s_own_files_and_nothing_else(page, server):
         with pytest.raises(urllib.error.HTTPError) as refused:
             urllib.request.urlopen(server + path)
         assert refused.value.code == 404, path
-    # a path with a slash in a part (/runs/../.., ..%2f) is no file's route: Dash's page itself
+    # a path with a slash in a part (/runs/../.., ..%2f) is no file's route: 404 too, not the page
     for path in ("runs/../../etc/passwd", f"runs/{run_id}/..%2fsummary.json",
-                 f"runs/{run_id}/results.csv/x"):
-        with urllib.request.urlopen(server + path) as answer:
-            body = answer.read().decode()
-        assert "root:" not in body and "F2_peak" not in body and "_dash-" in body, path
+                 f"runs/{run_id}/results.csv/x", f"runs/{run_id}/"):
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(server + path)
+        body = refused.value.read().decode()
+        assert refused.value.code == 404, path
+        assert "root:" not in body and "F2_peak" not in body and "_dash-" not in body, path
