@@ -9,7 +9,7 @@ from urllib.parse import unquote
 
 import dash
 import numpy as np
-from dash import ALL, Input, Output, State, ctx, html
+from dash import ALL, Input, Output, State, ctx
 
 import sewfmu
 from sewfmu.app.drawing import mechanism_figure, series_figure, sweep_figure
@@ -41,64 +41,53 @@ def register(app, page) -> None:
     def show_values(label):
         return values_of_choice(page, label)
 
+    # a finished run's figures and table row come with the answer that says it is done (not
+    # one round trip later, through the runs store): the page shows them a tenth of a second sooner
     @app.callback(Output("job", "data"), Output("poll", "disabled"), Output("progress", "value"),
                   Output("status", "children"), Output("alert", "children"),
-                  Output("runs", "data"),
+                  Output("runs", "data"), Output("figures", "children"),
+                  Output("figures-title", "children"), Output("series", "options"),
+                  Output("series", "value"), Output("table", "children"),
                   Input("run", "n_clicks"), Input("cancel", "n_clicks"),
                   Input("poll", "n_intervals"),
                   State("scenario", "value"), State({"type": "value", "name": ALL}, "value"),
                   State({"type": "value", "name": ALL}, "id"), State("defaults", "data"),
-                  State("job", "data"), State("runs", "data"), prevent_initial_call=True)
-    def run_cancel_follow(_run, _cancel, _tick, label, texts, ids, defaults, job_id, runs):
+                  State("job", "data"), State("runs", "data"), State("series", "value"),
+                  State("ticked", "data"), prevent_initial_call=True)
+    def run_cancel_follow(_run, _cancel, _tick, label, texts, ids, defaults, job_id, runs,
+                          chosen, ticked):
+        unshown = (NOT,) * 5                # the figures and the table as they are
         which = ctx.triggered_id
         if which == "run":
             if page.jobs.get(job_id) is not None and page.jobs.get(job_id).status == "running":
-                return NOT, NOT, NOT, NOT, "a run is going: wait for it, or Cancel it", NOT
+                return (NOT, NOT, NOT, NOT, "a run is going: wait for it, or Cancel it", NOT,
+                        *unshown)
             if label not in page.choices:
-                return NOT, NOT, NOT, NOT, "choose a scenario", NOT
+                return NOT, NOT, NOT, NOT, "choose a scenario", NOT, *unshown
             typed = {i["name"]: t for i, t in zip(ids, texts)}
             try:
                 changed = page.check(label, typed, defaults or {})
                 new = page.jobs.start("run", page.request(label, changed))
             except sewfmu.Error as err:
-                return None, True, 0, "", _one_line(err), NOT
-            return new, False, 0, "running…", "", NOT
+                return None, True, 0, "", _one_line(err), NOT, *unshown
+            return new, False, 0, "running…", "", NOT, *unshown
         job = page.jobs.get(job_id)
         if job is None:
-            return None, True, 0, "", NOT, NOT
+            return None, True, 0, "", NOT, NOT, *unshown
         if which == "cancel":
             page.jobs.cancel(job_id)
-            return None, True, 0, "cancelled", "", NOT
+            return None, True, 0, "cancelled", "", NOT, *unshown
         if which == "poll":     # answered as soon as the job ends, not at the next poll
             job.settled.wait(SETTLING)
         if job.status == "running":
-            return NOT, False, job.fraction, f"running… {100 * job.fraction:.0f} %", NOT, NOT
+            return (NOT, False, job.fraction, f"running… {100 * job.fraction:.0f} %", NOT, NOT,
+                    *unshown)
         if job.status == "done":
             took = (job.finished or time.monotonic()) - job.started
-            return None, True, 1, f"done in {took:.1f} s", "", runs + page.entries(job, runs)
-        return None, True, 0, job.status, job.error or "", NOT
-
-    @app.callback(Output("figures", "children"), Output("figures-title", "children"),
-                  Output("series", "options"), Output("series", "value"),
-                  Input("runs", "data"), State("series", "value"))
-    def show_figures(runs, chosen):
-        if not runs:
-            return figures(None), "key figures", [], []
-        newest = runs[-1]
-        names = [n for n in page.variant(newest)["series"] if n not in ("crank_deg", "time")]
-        chosen = [c for c in chosen or [] if c in names] or _default_series(names)
-        return (figures(newest), f"key figures of {newest['label']}",
-                [{"label": f"{n} [{newest['units'].get(n, '')}]", "value": n} for n in names],
-                chosen)
-
-    @app.callback(Output("table", "children"), Input("runs", "data"), State("ticked", "data"))
-    def show_table(runs, ticked):
-        if not runs:
-            return html.P("no runs yet", className="meaning")
-        ticked = set(ticked or []) | {runs[-1]["key"]}
-        for run in runs:      # report.html is made when first asked for
-            run["files"] = list(dict.fromkeys([*present(page.root, run["id"]), "report.html"]))
-        return runs_table(runs, list(ticked))
+            runs = runs + page.entries(job, runs)
+            return (None, True, 1, f"done in {took:.1f} s", "", runs,
+                    *_shown_runs(page, runs, chosen, ticked))
+        return None, True, 0, job.status, job.error or "", NOT, *unshown
 
     @app.callback(Output("ticked", "data"), Input({"type": "tick", "key": ALL}, "value"),
                   prevent_initial_call=True)
@@ -199,6 +188,20 @@ def register(app, page) -> None:
         figure = figure if figure in names else (names[0] if names else None)
         return sweep_figure(data["rows"], data["swept"], figure, data["units"]), \
             names, figure
+
+
+def _shown_runs(page, runs: list, chosen: list | None, ticked: list | None) -> tuple:
+    """The newest run's key figures (and its title), the series it recorded to choose from (those
+    chosen kept where it has them), and the table of runs, the newest ticked."""
+    newest = runs[-1]
+    names = [n for n in page.variant(newest)["series"] if n not in ("crank_deg", "time")]
+    chosen = [c for c in chosen or [] if c in names] or _default_series(names)
+    ticked = set(ticked or []) | {newest["key"]}
+    for run in runs:      # report.html is made when first asked for
+        run["files"] = list(dict.fromkeys([*present(page.root, run["id"]), "report.html"]))
+    return (figures(newest), f"key figures of {newest['label']}",
+            [{"label": f"{n} [{newest['units'].get(n, '')}]", "value": n} for n in names],
+            chosen, runs_table(runs, list(ticked)))
 
 
 def values_of_choice(page, label: str) -> tuple:

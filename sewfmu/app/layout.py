@@ -43,7 +43,7 @@ def page(choices: list[str], first: tuple) -> html.Div:
         dcc.Interval(id="poll", interval=POLL_MS, disabled=True),
         html.Section(className="panel", children=[
             html.H2("key figures", id="figures-title"),
-            html.Div(id="figures", className="figures")]),
+            html.Div(figures(None), id="figures", className="figures")]),
         html.Div(className="views", children=[
             html.Section(className="panel", **{"data-view": "plot"}, children=[
                 html.H2("recorded series"),
@@ -65,7 +65,8 @@ def page(choices: list[str], first: tuple) -> html.Div:
             html.H2("runs"),
             html.P("tick runs to overlay them on the plots; the last ticked one moves",
                    className="meaning"),
-            html.Div(id="table", className="table")]),
+            html.Div(html.P("no runs yet", className="meaning"), id="table",
+                     className="table")]),
         sweep_panel(numeric),
     ])
 
