@@ -151,6 +151,9 @@ class SewSlave(ExceptionFreeAccess, FmuState):
                             if outputs.get(name) == "Boolean" and self._kinds[vr] == "Boolean"}
         self._input_names = {vr: name for vr, name in self._names.items()
                              if name in self._inputs and vr in self._real_setters}
+        # the Real outputs read last (get_reals) and their places in the row
+        self._read_vrs: list | None = None
+        self._read_places: list[int] = []
 
     # --- declaration ---------------------------------------------------------------------------
     def _declare(self) -> list[Variable]:
@@ -392,7 +395,8 @@ class SewSlave(ExceptionFreeAccess, FmuState):
         try:
             if self._held_stale:
                 self._note_held_rates()   # which rates act as zero, from what was set
-            self.advance(self.model(), t, h)
+            model = self._model           # built already but for the first step: no call
+            self.advance(model if model is not None else self.model(), t, h)
             self._time = t + h
             self._elapsed += h
             self._cache = None
@@ -496,5 +500,8 @@ def _non_finite(values: dict[str, Any]) -> str | None:
 
 
 def fields_of(obj) -> dict[str, Any]:
-    """A (frozen) dataclass instance as a plain dict: outputs, or internal state to save."""
+    """A named tuple or a (frozen) dataclass instance as a plain dict, in the order of its
+    fields: outputs, or internal state to save."""
+    if isinstance(obj, tuple):
+        return obj._asdict()
     return dict(vars(obj))

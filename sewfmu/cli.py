@@ -329,7 +329,12 @@ def main(argv=None) -> int:
                    help="report.html: what was run, the table of points and the plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sweep)
-    _design_commands(sub)
+    # the design studies' commands and the page's are added (their modules imported) unless the
+    # command line names one of the commands above: `sewfmu run` does not load them; the
+    # help, a misspelt command and their own commands find them all
+    words = sys.argv[1:] if argv is None else list(argv)
+    if next((w for w in words if not w.startswith("-")), None) not in sub.choices:
+        _design_commands(sub)
     for stream in (sys.stdout, sys.stderr):
         # a terminal that is not UTF-8 gets escapes for ω or °, not a UnicodeEncodeError
         if hasattr(stream, "reconfigure"):
