@@ -42,12 +42,7 @@ from .fmu_state import FmuState
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
 from .ports import Port, held_note, input_bound, input_ranges
-from .pythonfmu_quirks import (
-    ExceptionFreeAccess,
-    describe,
-    forget_resources_path,
-    release_state_at_exit,
-)
+from .pythonfmu_quirks import ExceptionFreeAccess, describe, forget_resources_path, release_state_at_exit
 
 # a step must start where the last one ended, to within this fraction of max(1 s, |t|, h)
 _TIME_TOLERANCE = 1e-9
@@ -151,9 +146,7 @@ class SewSlave(ExceptionFreeAccess, FmuState):
                             if outputs.get(name) == "Boolean" and self._kinds[vr] == "Boolean"}
         self._input_names = {vr: name for vr, name in self._names.items()
                              if name in self._inputs and vr in self._real_setters}
-        # the Real outputs read last (get_reals) and their places in the row
-        self._read_vrs: list | None = None
-        self._read_places: list[int] = []
+        self._read_vrs, self._read_places = None, []   # get_reals: the last read, their places
 
     # --- declaration ---------------------------------------------------------------------------
     def _declare(self) -> list[Variable]:
@@ -395,7 +388,7 @@ class SewSlave(ExceptionFreeAccess, FmuState):
         try:
             if self._held_stale:
                 self._note_held_rates()   # which rates act as zero, from what was set
-            model = self._model           # built already but for the first step: no call
+            model = self._model           # built already but before the first step: no call
             self.advance(model if model is not None else self.model(), t, h)
             self._time = t + h
             self._elapsed += h
@@ -500,8 +493,5 @@ def _non_finite(values: dict[str, Any]) -> str | None:
 
 
 def fields_of(obj) -> dict[str, Any]:
-    """A named tuple or a (frozen) dataclass instance as a plain dict, in the order of its
-    fields: outputs, or internal state to save."""
-    if isinstance(obj, tuple):
-        return obj._asdict()
-    return dict(vars(obj))
+    """A named tuple or a dataclass instance as a plain dict: outputs, or the state to save."""
+    return obj._asdict() if isinstance(obj, tuple) else dict(vars(obj))

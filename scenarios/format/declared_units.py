@@ -1,30 +1,34 @@
 """The declared unit of every parameter and input of sewfmu's FMUs, for a scenario's checks (is
 `shaft.omega0` a parameter? which unit is "955 rpm" converted to?) and a sweep's axes.
 
-They are declared by the FMUs' slave classes (components/registry.py reads them there), and
-importing those classes cost every process 20-40 ms of CPU before anything ran (the models, the
-slave layer, ctypes), while the FMU imports its own copy of them anyway. So they are worked out
-from the classes once per version of the model code (the content hash of components/, the
-same hash the FMUs' up-to-date check reads) and kept in the cache folder (files/cache_root.py),
-in the folder FOLDER of its subfolder, as one small JSON file named by that hash; a later
-process reads it. Writing one removes the tables of other versions not written for STALE_DAYS. A file that does not say what it must (another hash inside, an FMU missing, not JSON) is
-not used: the classes are read again and the file written anew. Without a cache folder
-(SEWFMU_CACHE_DIR=""), or where it cannot be written, the classes are read in every process,
-as before.
+The FMUs' slave classes declare them (components/registry.py reads them there), but importing
+those classes cost every process the models, the slave layer and ctypes before anything ran,
+while the FMU imports its own copy of them anyway. So they are worked out from the classes once
+per version of the model code (the content hash of components/, files/code_hash.py) and kept
+in the cache folder (files/cache_root.py), in the folder FOLDER of its subfolder, as one small
+JSON file named by that hash; a later process reads it. Writing one removes the tables of other
+versions not written for STALE_DAYS. A file that does not say what it must (another hash
+inside, an FMU missing, not JSON) is not used: the classes are read again and the file written
+anew. Without a cache folder (SEWFMU_CACHE_DIR=""), or where it cannot be written, the classes
+are read in every process, as before.
 """
 from __future__ import annotations
 
 import json
 import re
 import time
+from pathlib import Path
 
+import sewfmu.components
 from sewfmu.components.registry import FMUS
 from sewfmu.components.registry import parameter_units as _from_classes
 from sewfmu.scenarios.files.cache_root import SUBFOLDER, configured_root
+from sewfmu.scenarios.files.code_hash import hash_of
 
 FOLDER = "declared-units"           # in the cache's SUBFOLDER (files/cache_root.py)
 STALE_DAYS = 30                     # tables of other code versions not written since go
 
+MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent   # what the slave classes are
 _NAME = re.compile(r"[0-9a-f]{12}\.json")      # the tables' names: nothing else is removed
 _KNOWN: dict[str, dict[str, dict[str, str]]] = {}      # this process's: code hash -> table
 
@@ -35,9 +39,7 @@ def parameter_units(fmu: str) -> dict[str, str]:
 
 
 def _table() -> dict[str, dict[str, str]]:
-    from sewfmu.scenarios.fmu_build.sources import model_code_hash  # the builders stay unloaded
-
-    key = model_code_hash()
+    key = hash_of(MODEL_CODE_DIR)       # as fmu_build/sources.py's model_code_hash
     if key in _KNOWN:
         return _KNOWN[key]
     root = configured_root()
