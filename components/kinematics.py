@@ -102,14 +102,15 @@ def dyad_rrr(p: Motion, r_p: float, q: Motion, r_q: float, side: int, name: str 
     if det == 0.0:
         raise AssemblyError(f"{name}: links of {r_p:.6g} m and {r_q:.6g} m are stretched flat")
 
-    def solve(ra, rb):
-        return (ra * by_ - rb * ay_) / det, (ax_ * rb - bx_ * ra) / det
-
-    vx, vy = solve(ax_ * p.vx + ay_ * p.vy, bx_ * q.vx + by_ * q.vy)
+    # each system solved by Cramer's rule: (ra·by - rb·ay) / det, (ax·rb - bx·ra) / det,
+    # written out twice rather than as a function made at every call (the FMUs' hot path)
+    ra, rb = ax_ * p.vx + ay_ * p.vy, bx_ * q.vx + by_ * q.vy
+    vx, vy = (ra * by_ - rb * ay_) / det, (ax_ * rb - bx_ * ra) / det
     dvpx, dvpy = vx - p.vx, vy - p.vy
     dvqx, dvqy = vx - q.vx, vy - q.vy
-    accx, accy = solve(ax_ * p.ax + ay_ * p.ay - (dvpx * dvpx + dvpy * dvpy),
-                       bx_ * q.ax + by_ * q.ay - (dvqx * dvqx + dvqy * dvqy))
+    ra = ax_ * p.ax + ay_ * p.ay - (dvpx * dvpx + dvpy * dvpy)
+    rb = bx_ * q.ax + by_ * q.ay - (dvqx * dvqx + dvqy * dvqy)
+    accx, accy = (ra * by_ - rb * ay_) / det, (ax_ * rb - bx_ * ra) / det
     return Motion(x, y, vx, vy, accx, accy)
 
 

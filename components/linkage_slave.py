@@ -34,7 +34,9 @@ class LinkageSlave(SewSlave):
 
     def output_row(self):
         u = self.extrapolated_inputs(self._elapsed)
-        motion = self.model().motion(u["phi"], u["omega"], u["epsilon"])
+        model = self._model               # built already but before the first step
+        motion = (model if model is not None else self.model()).motion(u["phi"], u["omega"],
+                                                                         u["epsilon"])
         if self._by_attributes:
             try:
                 return list(map(float, type(self)._read_motion(motion)))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 try:   # written into an FMU by `sewfmu build`: {repr(parameters): _top_of(parameters)}
     from .assembly_table import BUILT_TOPS
@@ -39,6 +40,7 @@ REQUIRED_DISPLACEMENT = 1
 
 # the assembly check samples the whole crank turn this finely (0.1°)
 _ASSEMBLY_SAMPLES = 3600
+_O1 = Motion(0.0, 0.0)       # the crank pivot, at rest at the origin (immutable: made once)
 
 
 @dataclass(frozen=True)
@@ -63,8 +65,9 @@ class PunchLinkageParams:
     phi_return: float = parameter(math.radians(150.0), "rad", "required displacement: return angle")
 
 
-@dataclass(frozen=True)
-class Excitation:
+# a named tuple rather than a frozen dataclass (immutable all the same): made at every step of
+# the FMU, and a tuple is made several times faster
+class Excitation(NamedTuple):
     """psi and xi with their time derivatives."""
     psi: float
     xi: float
@@ -90,8 +93,12 @@ class PunchLinkage:
     # --- six-bar -----------------------------------------------------------------------------
     def joints(self, alpha, alpha_rate=0.0, alpha_accel=0.0) -> dict[str, Motion]:
         """Motion of every joint (O1, A, O2, B, C, D) for crank angle alpha (CCW from +x)."""
+        return dict(zip(("O1", "A", "O2", "B", "C", "D"),
+                        self._chain(alpha, alpha_rate, alpha_accel)))
+
+    def _chain(self, alpha, alpha_rate, alpha_accel) -> tuple[Motion, ...]:
         p = self.p
-        o1 = Motion(0.0, 0.0)
+        o1 = _O1
         o2 = Motion(p.x_O2, p.y_O2)
         a = point_on_link(o1, p.L_O1A, angle(alpha, alpha_rate, alpha_accel))
         # B on the +x side of A -> O2, i.e. on the right of that (upward) line
@@ -100,11 +107,12 @@ class PunchLinkage:
         c = point_on_link(o2, p.L_O2C, rocker, offset=-p.angle_BO2C)
         # D below C on the vertical line x = x_D
         d = dyad_rrp(c, p.L_CD, (p.x_D, 0.0), math.pi / 2, -1, name="rod CD / slider line")
-        return {"O1": o1, "A": a, "O2": o2, "B": b, "C": c, "D": d}
+        return o1, a, o2, b, c, d
 
     def slider(self, alpha, alpha_rate, alpha_accel) -> Motion:
-        """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives."""
-        return self.joints(alpha, alpha_rate, alpha_accel)["D"]
+        """Motion of the slider D for crank angle alpha (CCW from +x) and its derivatives (the
+        FMU's every step: the joints without their dict)."""
+        return self._chain(alpha, alpha_rate, alpha_accel)[5]
 
     def _top(self) -> tuple[float, float]:
         """(crank angle, slider height) of the slider's highest point, after checking that the

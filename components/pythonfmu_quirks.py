@@ -29,12 +29,17 @@ class ExceptionFreeAccess:
 
     def get_reals(self, vrs) -> list[float]:
         # outputs (every step's call): read from the row of outputs through the table of their
-        # places, the row made once per instant (SewSlave._fill_cache)
-        try:
-            slots = self._real_slots
-            places = [slots[vr] for vr in vrs]
-        except Exception:                 # noqa: BLE001 - not outputs: answered below
-            return self._get_real_values(vrs)
+        # places, the row made once per instant (SewSlave._fill_cache); a host asks for the
+        # same references at every step, so their places are kept from the last call
+        if type(vrs) is list and vrs == self._read_vrs:   # (pythonfmu passes lists)
+            places = self._read_places
+        else:
+            try:
+                slots = self._real_slots
+                places = [slots[vr] for vr in vrs]
+            except Exception:             # noqa: BLE001 - not outputs: answered below
+                return self._get_real_values(vrs)
+            self._read_vrs, self._read_places = list(vrs), places
         row = self._cache
         if row is None:
             row = self._fill_cache()
@@ -79,9 +84,11 @@ class ExceptionFreeAccess:
             self._set_real_values(vrs, values)
             return
         inputs, fresh = self._inputs, self._set_since_step
+        value = _NOTHING
         for name, value in zip(names, values):
             inputs[name] = value
             fresh.add(name)
+        if value is not _NOTHING:     # what each setter does besides, once for the call
             self._held_stale = True
             self._elapsed = 0.0
             self._cache = None
@@ -108,6 +115,8 @@ class ExceptionFreeAccess:
     def _call(self, kind: str, which: int) -> str:
         return type(self).call_names.get(kind, ("Get", "Set"))[which]
 
+
+_NOTHING = object()                  # set_reals: no value was set
 
 # kind -> (conversion of a got value, the answer for a reference of another kind)
 _CONVERT: dict[str, tuple[Callable[[Any], Any], Any]] = {

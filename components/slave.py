@@ -42,12 +42,7 @@ from .fmu_state import FmuState
 from .kinematics import AssemblyError
 from .parameters import ParameterError, parameter_info
 from .ports import Port, held_note, input_bound, input_ranges
-from .pythonfmu_quirks import (
-    ExceptionFreeAccess,
-    describe,
-    forget_resources_path,
-    release_state_at_exit,
-)
+from .pythonfmu_quirks import ExceptionFreeAccess, describe, forget_resources_path, release_state_at_exit
 
 # a step must start where the last one ended, to within this fraction of max(1 s, |t|, h)
 _TIME_TOLERANCE = 1e-9
@@ -151,6 +146,7 @@ class SewSlave(ExceptionFreeAccess, FmuState):
                             if outputs.get(name) == "Boolean" and self._kinds[vr] == "Boolean"}
         self._input_names = {vr: name for vr, name in self._names.items()
                              if name in self._inputs and vr in self._real_setters}
+        self._read_vrs, self._read_places = None, []   # get_reals: the last read, their places
 
     # --- declaration ---------------------------------------------------------------------------
     def _declare(self) -> list[Variable]:
@@ -392,7 +388,8 @@ class SewSlave(ExceptionFreeAccess, FmuState):
         try:
             if self._held_stale:
                 self._note_held_rates()   # which rates act as zero, from what was set
-            self.advance(self.model(), t, h)
+            model = self._model           # built already but before the first step: no call
+            self.advance(model if model is not None else self.model(), t, h)
             self._time = t + h
             self._elapsed += h
             self._cache = None
@@ -496,5 +493,5 @@ def _non_finite(values: dict[str, Any]) -> str | None:
 
 
 def fields_of(obj) -> dict[str, Any]:
-    """A (frozen) dataclass instance as a plain dict: outputs, or internal state to save."""
-    return dict(vars(obj))
+    """A named tuple or a dataclass instance as a plain dict: outputs, or the state to save."""
+    return obj._asdict() if isinstance(obj, tuple) else dict(vars(obj))

@@ -389,7 +389,7 @@ def _folder(value, name: str) -> Path | None:
 
 def _unit_of(sc: Scenario, target: str) -> str:
     """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
-    from sewfmu.components.registry import parameter_units  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.declared_units import parameter_units  # on first use
 
     inst, _, key = target.partition(".")
     if inst == "experiment":

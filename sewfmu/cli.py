@@ -329,12 +329,19 @@ def main(argv=None) -> int:
                    help="report.html: what was run, the table of points and the plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sweep)
-    _design_commands(sub)
+    # the design studies' commands and the page's are added (their modules imported) unless the
+    # command line names one of the commands above: `sewfmu run` does not load them; the
+    # help, a misspelt command and their own commands find them all
+    words = sys.argv[1:] if argv is None else list(argv)
+    if next((w for w in words if not w.startswith("-")), None) not in sub.choices:
+        _design_commands(sub)
     for stream in (sys.stdout, sys.stderr):
         # a terminal that is not UTF-8 gets escapes for ω or °, not a UnicodeEncodeError
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
     args = parser.parse_args(argv)
+    if args.command == "run":
+        _one_blas_thread()
     # from here a signal stops the command cleanly (the start-up's handlers: sewfmu/__main__.py)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()
@@ -362,6 +369,19 @@ def main(argv=None) -> int:
         print(f"sewfmu: error: {console.explain(err, args.command)}", file=sys.stderr)
         return 1
     return 0
+
+
+# what a user sets to choose OpenBLAS's threads (numpy's and scipy's BLAS)
+BLAS_THREAD_SETTINGS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "GOTO_NUM_THREADS")
+
+
+def _one_blas_thread() -> None:
+    """numpy's OpenBLAS starts a thread per core when numpy is imported, and each busy-waits
+    for work about 0.1 s of CPU; a run does no linear algebra (its models are plain Python, its
+    figures interpolations of the records), so it asks for one thread, before the run path
+    imports numpy, unless the user chose."""
+    if "numpy" not in sys.modules and not any(k in os.environ for k in BLAS_THREAD_SETTINGS):
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
 
 def _fmi_version(text: str) -> int:

@@ -5,6 +5,7 @@ fmuCheck) were skipped, and how to run them."""
 import atexit
 import os
 import shutil
+import sysconfig
 import tempfile
 from pathlib import Path
 
@@ -48,6 +49,21 @@ def fmu3_dir(fmu_dir):
 @pytest.fixture(scope="session")
 def fmu3_paths(fmu3_dir):
     return {p.stem: p for p in fmu3_dir.glob("*.fmu")}
+
+
+@pytest.fixture(scope="session")
+def stdlib_home(tmp_path_factory) -> Path:
+    """A Python home that holds the standard library and nothing else (no site-packages): the
+    FMUs must run with only that in a host that is not a Python process (fmuCheck, fmusim)."""
+    home = tmp_path_factory.mktemp("stdlib_home")
+    stdlib = Path(sysconfig.get_paths()["stdlib"])
+    target = home / "lib" / stdlib.name
+    target.mkdir(parents=True)
+    for entry in stdlib.iterdir():
+        if entry.name != "site-packages":
+            (target / entry.name).symlink_to(entry)
+    (target / "site-packages").mkdir()
+    return home
 
 
 @pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])

@@ -141,7 +141,7 @@ def test_a_users_folder_as_the_cache_keeps_every_file(fmu_dir, tmp_path):
                                                              fmu_cache.SUBFOLDER])
     entries = [e for e in _entries(home) if re.fullmatch("[0-9a-f]{32}", e)]
     assert len(entries) == 3 and _entries(home) == sorted([*entries, "CACHEDIR.TAG",
-                                                           ".sewfmu-lock"])
+                                                           ".sewfmu-lock", "declared-units"])
     for entry in entries:
         marker = home / fmu_cache.SUBFOLDER / entry / fmu_cache.MARKER
         assert marker.read_text().splitlines()[:2] == [fmu_cache.MAGIC, f"key {entry}"]

@@ -9,7 +9,6 @@ import math
 import os
 import subprocess
 import sys
-import sysconfig
 from pathlib import Path
 
 import numpy as np
@@ -26,21 +25,6 @@ pytestmark = [pytest.mark.slow, pytest.mark.interop, pytest.mark.skipif(
     not (FMUCHECK and os.access(FMUCHECK, os.X_OK)),
     reason="SEWFMU_FMUCHECK does not name an executable fmuCheck (the Modelica FMU Compliance "
            "Checker, a host written in C): set it to run the FMUs outside Python")]
-
-
-@pytest.fixture(scope="module")
-def stdlib_home(tmp_path_factory) -> Path:
-    """A Python home that holds the standard library and nothing else (no site-packages):
-    the FMUs must run with only that."""
-    home = tmp_path_factory.mktemp("stdlib_home")
-    stdlib = Path(sysconfig.get_paths()["stdlib"])
-    target = home / "lib" / stdlib.name
-    target.mkdir(parents=True)
-    for entry in stdlib.iterdir():
-        if entry.name != "site-packages":
-            (target / entry.name).symlink_to(entry)
-    (target / "site-packages").mkdir()
-    return home
 
 
 def _env(home: Path) -> dict[str, str]:

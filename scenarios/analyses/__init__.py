@@ -88,23 +88,30 @@ def figures_of(summary: dict) -> dict:
 
 
 @functools.cache
+def _names() -> tuple[str, ...]:
+    """The analysis modules of this package (sub-packages hold what the analyses share): a
+    listing of the folder, nothing imported."""
+    return tuple(info.name for info in pkgutil.iter_modules(__path__) if not info.ispkg)
+
+
+@functools.cache
+def _mechanism_of(name: str) -> Mechanism:
+    return importlib.import_module(f"{__name__}.{name}").MECHANISM
+
+
 def mechanisms() -> dict[str, Mechanism]:
-    """Every analysis module of this package by name -> its MECHANISM (sub-packages hold what
-    the analyses share)."""
-    found = {}
-    for info in pkgutil.iter_modules(__path__):
-        if info.ispkg:
-            continue
-        found[info.name] = importlib.import_module(f"{__name__}.{info.name}").MECHANISM
-    return found
+    """Every analysis module of this package by name -> its MECHANISM."""
+    return {name: _mechanism_of(name) for name in _names()}
 
 
 def mechanism(analysis: str) -> Mechanism:
-    known = mechanisms()
+    """One analysis's MECHANISM; only its own module is imported (a run of the punch drive
+    does not load the carriage's, the feed's and the take-up's models and analyses)."""
+    known = _names()
     if analysis not in known:
         raise RoleError(f"unknown analysis {analysis!r}{did_you_mean(analysis, known)} "
                         f"(known: {', '.join(known)})")
-    return known[analysis]
+    return _mechanism_of(analysis)
 
 
 def figure_units(analysis: str | None, study: str | None = None) -> dict[str, str]:

@@ -12,7 +12,8 @@ in any process, until the file changes (another content, another entry).
 - What it owns: that folder may be the user's (SEWFMU_CACHE_DIR=~/work), so the cache keeps to
   its subfolder SUBFOLDER, and there to entries named by a content hash that hold its MARKER
   (MAGIC on the first line) beside the extracted FMU (ENTRY/fmu/). Nothing else there is ever
-  used, changed or removed; a folder in the way of an entry makes that FMU extract per process.
+  used, changed or removed (but the folder declared-units, scenarios/format/declared_units.py's);
+  a folder in the way of an entry makes that FMU extract per process.
 - Checked before use: an entry is compared with the FMU's own zip directory (every member's
   name, size and CRC32, and no file the FMU does not hold but bytecode); a damaged or changed
   entry is extracted again, so a deleted library or an edited module never runs.
@@ -40,6 +41,7 @@ from pathlib import Path
 
 from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.files import archives
+from sewfmu.scenarios.files import cache_root as cache_root_setting
 from sewfmu.scenarios.files.outputs import write_atomic
 
 try:
@@ -51,7 +53,7 @@ STALE_DAYS = 30
 # beyond this many entries the least recently used go, if unused for an hour (a running process
 # may still be loading from a newer one); about 1 MiB each
 MAX_ENTRIES = 64
-SUBFOLDER = "sewfmu-fmu-cache"
+SUBFOLDER = cache_root_setting.SUBFOLDER
 MARKER = "SEWFMU-CACHE-ENTRY"
 MAGIC = "sewfmu FMU cache entry, version 1: made and removed by sewfmu"
 # the Cache Directory Tagging Specification's signature: backup tools skip the folder
@@ -69,10 +71,7 @@ _TEMP = re.compile(r"sewfmu-fmu-(?P<pid>\d+)-[A-Za-z0-9_]+")     # tempfile.mkdt
 # the folder the process started in: a relative SEWFMU_CACHE_DIR means the same folder whatever
 # the code's working folder later, and the FMU gets an absolute resources URI (a relative one
 # failed as "instantiate returned FATAL")
-try:
-    _START_DIR = os.getcwd()
-except OSError:                     # started in a removed folder
-    _START_DIR = None
+_START_DIR = cache_root_setting.START_DIR
 
 _CACHED: set[str] = set()           # the folders this process was given from the cache
 _SWEPT: set[str] = set()            # the folders whose dead scratch this process has removed
@@ -80,16 +79,7 @@ _SWEPT: set[str] = set()            # the folders whose dead scratch this proces
 
 def _configured_root() -> Path | None:
     """Where the cache is to be (not made here); None where it is turned off."""
-    setting = os.environ.get("SEWFMU_CACHE_DIR")
-    if setting == "":
-        return None
-    if setting:
-        return Path(os.path.abspath(os.path.join(_START_DIR or os.getcwd(),
-                                                 os.path.expanduser(setting))))
-    # the XDG specification: a relative XDG_CACHE_HOME is invalid and ignored
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg) if xdg and os.path.isabs(xdg) else Path.home() / ".cache"
-    return base / "sewfmu" / "fmus"
+    return cache_root_setting.configured_root(_START_DIR)
 
 
 def cache_root() -> Path | None:

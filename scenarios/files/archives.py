@@ -18,7 +18,6 @@ import contextlib
 import os
 import re
 import shutil
-import socket
 import stat
 import time
 import zipfile
@@ -194,12 +193,14 @@ def differences(folder: Path, expected: list[Member], ignore: str = "__pycache__
     """The first way `folder` differs from the members (a file missing, of another size or CRC32,
     a file or link the archive does not hold), or None; folders named `ignore` are not looked
     into (the bytecode Python leaves beside the code)."""
-    folder = Path(folder)
+    # plain strings and os calls, not Path objects: a run checks every member of every cached
+    # FMU (45 files each), and pathlib's parsing was most of that check's time
+    folder = os.fspath(folder)
     names = {m.name for m in expected}
     for m in expected:
-        file = folder / m.name
+        file = os.path.join(folder, m.name)
         try:
-            st = file.lstat()
+            st = os.lstat(file)
         except OSError:
             return f"{m.name} is missing"
         if not stat.S_ISREG(st.st_mode):
@@ -212,14 +213,15 @@ def differences(folder: Path, expected: list[Member], ignore: str = "__pycache__
         except OSError as err:
             return f"{m.name} cannot be read ({err.strerror})"
     for base, dirs, files in os.walk(folder):
-        rel = Path(base).relative_to(folder)
+        rel = os.path.relpath(base, folder).replace(os.sep, "/")
+        prefix = "" if rel == "." else rel + "/"     # the members' names: '/' separators
         for d in list(dirs):
             if os.path.islink(os.path.join(base, d)):
-                return f"{(rel / d).as_posix()} is a link"
+                return f"{prefix}{d} is a link"
             if d == ignore:
                 dirs.remove(d)
         for f in files:
-            name = (rel / f).as_posix()
+            name = prefix + f
             if name not in names:
                 return f"{name} is not the archive's"
     return None
@@ -234,6 +236,8 @@ OTHER_HOSTS_SCRATCH_S = 86400
 
 def host() -> str:
     """This machine's name as it may stand in a file name."""
+    import socket  # only where there is scratch: a run from the cache names and finds none
+
     return re.sub(r"[^A-Za-z0-9_-]", "_", socket.gethostname())[:64] or "host"
 
 
@@ -246,7 +250,7 @@ def remove_dead_scratch(folder: Path, pattern: re.Pattern) -> list[Path]:
         entries = list(os.scandir(folder))
     except OSError:
         return removed
-    now, here = time.time(), host()
+    now, here = time.time(), None
     for entry in entries:
         match = pattern.fullmatch(entry.name)
         if not match:
@@ -259,6 +263,8 @@ def remove_dead_scratch(folder: Path, pattern: re.Pattern) -> list[Path]:
             continue
         pid = int(match.group("pid"))
         theirs = match.groupdict().get("host")
+        if theirs is not None and here is None:
+            here = host()
         if theirs is not None and theirs != here:
             dead = st.st_mtime < now - OTHER_HOSTS_SCRATCH_S
         else:

@@ -3,7 +3,6 @@ the model code and of the build, their content hash, sewfmu's version, and the v
 file says it is (up_to_date.py compares them; build.py writes them)."""
 from __future__ import annotations
 
-import hashlib
 import os
 import zipfile
 from pathlib import Path
@@ -11,6 +10,7 @@ from xml.etree import ElementTree
 
 import sewfmu.components
 from sewfmu._version import __version__
+from sewfmu.scenarios.files.code_hash import hash_of
 
 # the model code every FMU carries: all of components/, nothing else
 MODEL_CODE_DIR = Path(sewfmu.components.__file__).resolve().parent
@@ -33,9 +33,8 @@ def default_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
     return base / "fmi3" if fmi == 3 else base
 
 
-# a file's (path, inode, size, mtime) -> what was read from it, for this process's lifetime:
-# a run (and every sweep point in a worker) checks the FMUs by a stat of each file, and reads
-# and hashes only what changed since
+# an FMU file's (path, inode, size, mtime) -> the version read from it, for this process's
+# lifetime: a run (and every sweep point in a worker) checks the FMUs by a stat of each file
 _SEEN: dict[tuple, str | None] = {}
 
 
@@ -44,30 +43,18 @@ def _signature(path: Path) -> tuple:
     return str(path), st.st_ino, st.st_size, st.st_mtime_ns
 
 
-def _hash_of(*folders: Path) -> str:
-    files = [path for folder in folders for path in sorted(Path(folder).glob("*.py"))]
-    key = ("hash", *(_signature(path) for path in files))
-    if key not in _SEEN:
-        digest = hashlib.sha256()
-        for path in files:
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
-        _SEEN[key] = digest.hexdigest()[:12]
-    return _SEEN[key]
-
-
 def model_code_hash(source: Path = MODEL_CODE_DIR) -> str:
     """Hash of the model code every FMU carries: the name and bytes of each .py file in
     components/ (the FMI 2.0 and 3.0 layers both; nothing outside that folder). It names the
     package inside the FMU: same code, same name."""
-    return _hash_of(source)
+    return hash_of(source)
 
 
 def fmu_content_hash(source: Path = MODEL_CODE_DIR) -> str:
     """Hash of everything an FMU is made from: the model code (components/) and this build
     (fmu_build/: the entry script, the carried reference, the documentation page). It is the
     FMU's version: an edit of either rebuilds the FMUs."""
-    return _hash_of(source, BUILD_DIR)
+    return hash_of(source, BUILD_DIR)
 
 
 def fmu_version(fmu_path: Path) -> str | None:

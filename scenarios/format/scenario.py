@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from sewfmu.components.parameters import did_you_mean
-from sewfmu.components.registry import FMI_VERSIONS, FMUS, parameter_units
+from sewfmu.components.registry import FMI_VERSIONS, FMUS
+from sewfmu.scenarios.format.declared_units import parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import ScenarioError, plain, positive, positive_in, short

@@ -40,7 +40,8 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
     what the previous run wrote (outputs.replacing): a failed or interrupted run leaves the
     previous results as they were. `report` is a self-contained page with the plots, the
     animations and, for the punch drive, the comparison with the monolithic solution."""
-    from sewfmu.scenarios import animations  # matplotlib and pillow: only when animating
+    if animate or report:   # a run without pictures does not load the animations
+        from sewfmu.scenarios import animations
 
     summary = summary_of_runs(scenario, runs)
     if (plot or animate) and not scenario.analysis:        # asked for, and nothing to draw

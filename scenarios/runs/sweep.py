@@ -376,7 +376,8 @@ def _shown(value, unit: str) -> str:
 def declared_unit(scenario: Scenario, target: str) -> str:
     """The unit a swept `instance.parameter` (as its FMU declares it) or experiment key is held
     in: the unit of its axis."""
-    from sewfmu.components.registry import FMUS, parameter_units  # loaded on first use (start-up time)
+    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.declared_units import parameter_units
     from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS  # loaded on first use (start-up time)
 
     inst, _, key = target.partition(".")
