@@ -297,6 +297,8 @@ def test_sigterm_ends_the_server_and_every_run(browser, tmp_path):
     finally:
         code = stop_server(process)
     assert code == 0, process.stderr.read()
+    # the tab outlives the server: it says so, not a progress bar standing still
+    wait(browser, lambda: "server does not answer" in alert(browser))
     # the fork server and multiprocessing's resource tracker end when they read the end of
     # their pipes: after the server, soon
     end = time.monotonic() + 30

@@ -10,3 +10,19 @@
     .observe(document.documentElement, {childList: true, subtree: true});
   document.addEventListener("DOMContentLoaded", function () { label(document); });
 })();
+
+// A request the server does not answer (it was stopped, or this tab outlived it): said in the
+// alert, rather than a progress bar that stays where it was
+(function () {
+  var realFetch = window.fetch;
+  window.fetch = function () {
+    return realFetch.apply(this, arguments).catch(function (err) {
+      var alert = document.getElementById("alert");
+      if (alert) {
+        alert.textContent = "the app's server does not answer: it was stopped (start it " +
+          "again with `sewfmu app`, then reload this page)";
+      }
+      throw err;
+    });
+  };
+})();
