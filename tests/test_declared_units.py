@@ -30,7 +30,8 @@ def test_the_table_written_and_read_again_is_what_the_classes_declare(cache):
     assert again["MainShaft"]["omega0"] == "rad/s"
 
 
-@pytest.mark.parametrize("damage", ["another code version", "an FMU missing", "not JSON"])
+@pytest.mark.parametrize("damage", ["another code version", "an FMU missing", "not JSON",
+                                    "a unit changed"])
 def test_a_table_that_does_not_say_what_it_must_is_not_used(cache, damage):
     declared_units.parameter_units("MainShaft")
     data = json.loads(cache.read_text())
@@ -39,6 +40,8 @@ def test_a_table_that_does_not_say_what_it_must_is_not_used(cache, damage):
         data["model_code"] = "0" * 12
     elif damage == "an FMU missing":
         del data["units"]["Fabric"]
+    # "a unit changed": only that, the hash and every FMU as written (a hand edit, a damaged
+    # disk): the digest written with the units no longer matches them
     cache.write_text("{" if damage == "not JSON" else json.dumps(data))
     declared_units._KNOWN.clear()
     assert declared_units.parameter_units("MainShaft")["omega0"] == "rad/s"
@@ -64,3 +67,18 @@ def test_with_the_table_a_scenario_is_checked_without_the_slave_classes(cache, m
     value, loaded = done.stdout.splitlines()
     assert float(value) == pytest.approx(955 * 2 * 3.141592653589793 / 60, rel=1e-12)
     assert loaded == "[]"
+
+
+def test_a_changed_unit_in_the_table_gives_no_wrong_run(cache, tmp_path):
+    """From the attack: omega0's unit changed to rev/s in the table by hand; "955 rpm" must still
+    reach the FMU as 100.007 rad/s (a run in a new process, reading the table)."""
+    declared_units.parameter_units("MainShaft")
+    data = json.loads(cache.read_text())
+    data["units"]["MainShaft"]["omega0"] = "rev/s"
+    cache.write_text(json.dumps(data))
+    probe = ("from sewfmu.scenarios.format.loader import load\n"
+             "sc = load('punch_drive')\nsc.set_value('shaft.omega0', '955 rpm')\n"
+             "print(repr(sc.instances['shaft'].parameters['omega0']))\n")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=120, check=True).stdout
+    assert float(out) == pytest.approx(955 * 2 * 3.141592653589793 / 60, rel=1e-12)

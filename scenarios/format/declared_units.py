@@ -8,12 +8,15 @@ per version of the model code (the content hash of components/, files/code_hash.
 in the cache folder (files/cache_root.py), in the folder FOLDER of its subfolder, as one small
 JSON file named by that hash; a later process reads it. Writing one removes the tables of other
 versions not written for STALE_DAYS. A file that does not say what it must (another hash
-inside, an FMU missing, not JSON) is not used: the classes are read again and the file written
-anew. Without a cache folder (SEWFMU_CACHE_DIR=""), or where it cannot be written, the classes
-are read in every process, as before.
+inside, an FMU missing, not JSON, units that do not match the digest written with them: a
+table changed by hand or damaged on disk would convert "955 rpm" into a wrong unit without a
+word) is not used: the classes are read again and the file written anew. Without a cache
+folder (SEWFMU_CACHE_DIR=""), or where it cannot be written, the classes are read in every
+process, as before.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import time
@@ -61,17 +64,23 @@ def _read(path, key: str) -> dict[str, dict[str, str]] | None:
                 isinstance(u, dict) and all(isinstance(n, str) and isinstance(v, str)
                                             for n, v in u.items()) for u in units.values()):
             return None
-        return units
+        return units if data["digest"] == _digest(units) else None
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
+
+
+def _digest(units: dict) -> str:
+    """The units' own hash, written beside them: a table whose units were changed afterwards
+    does not match it."""
+    return hashlib.sha256(json.dumps(units, sort_keys=True).encode()).hexdigest()
 
 
 def _write(path, key: str, table: dict[str, dict[str, str]]) -> None:
     from sewfmu.scenarios.files.outputs import write_atomic  # only when the table is new
 
     try:
-        write_atomic(path, lambda f: json.dump({"model_code": key, "units": table}, f,
-                                               indent=1))
+        write_atomic(path, lambda f: json.dump({"model_code": key, "digest": _digest(table),
+                                                "units": table}, f, indent=1))
         old = time.time() - STALE_DAYS * 86400
         for other in path.parent.iterdir():
             if (_NAME.fullmatch(other.name) and other != path and other.is_file()
