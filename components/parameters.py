@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
+from .units import DISPLAY_UNITS
+
 # allowed ranges, checked after the finiteness check
 POSITIVE = "positive"
 NONNEGATIVE = "nonnegative"
@@ -98,7 +100,10 @@ def check_value(info: ParameterInfo, value: Any) -> None:
     low, high = info.bounds
     if high is not None and not (low <= value <= high):
         meant = _MEANT.get(info.unit)
-        hint = (f" (meant in {meant}? give the unit: \"{value:g} {meant}\")" if meant else "")
+        # offered only where the number, read in that unit, is within the range (9550 rad/s
+        # meant as rpm; not 5730, which is too fast in rpm too)
+        fits = meant is not None and low <= value / DISPLAY_UNITS[info.unit][meant] <= high
+        hint = f" (meant in {meant}? give the unit: \"{value:g} {meant}\")" if fits else ""
         raise ParameterError(info.name, f"must be within [{low:g}, {high:g}] {info.unit} in a "
                                         f"sewing machine's mechanism, got {value:g}{hint}")
 
