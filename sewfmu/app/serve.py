@@ -35,9 +35,8 @@ class Page:
                  workers: int | None = None):
         self.choices = choices                # label on the page -> catalogue name or path
         self.root = root
-        # the first run's process made ready now, on the scenario the page shows first
-        self.jobs = Jobs(root, warm=next(iter(choices.values()), None))
-        first = next(iter(choices.values()), None)
+        first = next(iter(choices.values()), None)      # the scenario the page shows first
+        self.jobs = Jobs(root, warm=first)    # the first run's process made ready now
         if first is not None:         # the first check of a value (FMUs' descriptions, units)
             threading.Thread(target=_warm_checks, args=(first,), daemon=True).start()
         self.scheduler = scheduler

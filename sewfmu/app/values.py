@@ -67,8 +67,8 @@ def short_run(source: str) -> dict | None:
 
 
 def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str]) -> dict:
-    """The values typed that differ from the scenario's, checked by loading the scenario with
-    them: {name: text}. A bad one raises sewfmu.Error with its one line."""
+    """The values typed that differ from the scenario's, checked as a run checks them before
+    its first step: {name: text}. A bad one raises sewfmu.Error with its one line."""
     changed = {}
     for name, text in typed.items():
         text = "" if text is None else str(text).strip()
