@@ -102,12 +102,19 @@ def explain(err: Exception, command: str) -> str:
             f"(a bug in sewfmu: please report it; --debug shows where)")
 
 
-def whole_number(text: str) -> int:
-    """An argparse type: a count of at least 1 (workers, samples, evaluations)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {value}")
-    return value
+def at_least(least: int):
+    """An argparse type: a whole number of at least `least`."""
+    def count(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {least}, got "
+                                             f"{text!r}") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {least}, got {value}")
+        return value
+    return count
+
+
+# a count of at least 1 (workers, evaluations)
+whole_number = at_least(1)

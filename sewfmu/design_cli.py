@@ -3,12 +3,11 @@ Their options and what they print, each calling the API's function of its verb (
 sewfmu/cli.py's main adds them to its commands (a module of their own: cli.py's size)."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from sewfmu import design_api as api
-from sewfmu.console import whole_number
+from sewfmu.console import at_least, whole_number
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
 
@@ -121,17 +120,6 @@ def cmd_sensitivity(args) -> None:
             print(f"    {name}: {cells}")
 
 
-def _at_least_two(text: str) -> int:
-    """--samples: the API's own check (a whole number >= 2), said the same way for 0 and 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
-
-
 def _index(value) -> str:
     return "n/a" if value is None else f"{value:.3g}"
 
@@ -187,7 +175,7 @@ def add_commands(sub) -> None:
                    help="a key figure to analyze; repeatable")
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE")
     p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
-    p.add_argument("--samples", type=_at_least_two, metavar="N",
+    p.add_argument("--samples", type=at_least(2), metavar="N",
                    help="Sobol: base samples N, a power of 2 "
                                                   "(N·(D+2) runs; default 64); Morris: "
                                                   "trajectories (N·(D+1) runs; default 16)")
