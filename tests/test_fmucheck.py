@@ -17,8 +17,7 @@ import pytest
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.interop.hosts import host_environment
-from sewfmu.scenarios.references.fmu_reference import read_options
-from sewfmu.scenarios.references.regression import REFERENCE_DIR
+from tests.host_references import assert_reproduces, reference_case
 
 FMUCHECK = os.environ.get("SEWFMU_FMUCHECK", "")
 pytestmark = [pytest.mark.slow, pytest.mark.interop, pytest.mark.skipif(
@@ -78,18 +77,13 @@ def test_the_linkage_alone_turns_through_one_revolution_at_its_start_speed(fmu_p
 
 @pytest.mark.parametrize("name", list(FMUS))
 def test_fmucheck_reproduces_the_regression_reference(fmu_paths, stdlib_home, tmp_path, name):
-    folder = REFERENCE_DIR / name
-    options = read_options(folder / f"{name}_ref.opt")
-    inputs = folder / f"{name}_in.csv"
+    options, inputs, ref = reference_case(name)
     args = ["-h", repr(options["StepSize"]), "-s", repr(options["StopTime"]), "-n", "0"]
-    if inputs.exists():
+    if inputs is not None:
         args += ["-i", str(inputs)]
     out = tmp_path / f"{name}.csv"
     proc = _fmucheck(fmu_paths[name], out, stdlib_home, *args)
     assert proc.returncode == 0, (proc.stdout + proc.stderr)[-2000:]
-    ref = np.genfromtxt(folder / f"{name}_ref.csv", delimiter=",", names=True)
     got = np.genfromtxt(out, delimiter=",", names=True)
     assert len(got) == len(ref)
-    for column in ref.dtype.names:
-        scale = max(np.abs(ref[column]).max(), 1e-300)
-        assert np.abs(got[column] - ref[column]).max() <= options["RelTol"] * scale, column
+    assert_reproduces(got, ref, options["RelTol"])

@@ -15,8 +15,7 @@ import pytest
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.interop.hosts import host_environment
-from sewfmu.scenarios.references.fmu_reference import read_options
-from sewfmu.scenarios.references.regression import REFERENCE_DIR
+from tests.host_references import assert_reproduces, reference_case
 
 FMUSIM = os.environ.get("SEWFMU_FMUSIM") or shutil.which("fmusim") or ""
 pytestmark = [pytest.mark.slow, pytest.mark.interop, pytest.mark.skipif(
@@ -41,17 +40,14 @@ def _read(path):
 
 @pytest.mark.parametrize("name", list(FMUS))
 def test_fmusim_reproduces_the_regression_reference(fmus, stdlib_home, tmp_path, name):
-    folder = REFERENCE_DIR / name
-    options = read_options(folder / f"{name}_ref.opt")
+    options, inputs, ref = reference_case(name)
     args = ["--stop-time", repr(options["StopTime"]), "--output-interval",
             repr(options["StepSize"])]
-    inputs = folder / f"{name}_in.csv"
-    if inputs.exists():
+    if inputs is not None:
         args += ["--input-file", str(inputs)]
     out = tmp_path / f"{name}.csv"
     proc = _fmusim(fmus[name], out, stdlib_home, *args)
     assert proc.returncode == 0, (proc.stdout + proc.stderr)[-2000:]
-    ref = np.genfromtxt(folder / f"{name}_ref.csv", delimiter=",", names=True)
     got = _read(out)
     n = len(got["time"])
     # where the stop time is not a whole number of steps, fmusim ends at the last whole one;
@@ -59,9 +55,7 @@ def test_fmusim_reproduces_the_regression_reference(fmus, stdlib_home, tmp_path,
     short_last = ref["time"][-1] - ref["time"][-2] < options["StepSize"] * (1 - 1e-9)
     assert n == len(ref) or (n == len(ref) - 1 and short_last)
     assert np.allclose(got["time"], ref["time"][:n], rtol=1e-12, atol=0)
-    for column in ref.dtype.names:
-        scale = max(np.abs(ref[column]).max(), 1e-300)
-        assert np.abs(got[column] - ref[column][:n]).max() <= options["RelTol"] * scale, column
+    assert_reproduces(got, ref, options["RelTol"], rows=n)
 
 
 def test_the_linkage_alone_follows_the_six_bar(fmus, stdlib_home, tmp_path):
