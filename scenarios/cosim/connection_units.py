@@ -51,34 +51,6 @@ def _dimension(base) -> str:
 
 
 def convert_inputs(inst, conversions: dict[int, tuple[float, float]]) -> None:
-    """Make `inst` take the inputs at these indices (of inst.inputs) converted: its own
-    pull_inputs and pull_changed_inputs replaced on the instance alone, so that every
-    algorithm, the rollback and the divergence check see the input in its own unit, and an
-    instance without converted inputs keeps the plain copy of cosim/instances.py."""
-    scale = [conversions.get(k, (1.0, 0.0)) for k in range(len(inst.inputs))]
-
-    def value(k: int, src, idx: int) -> float:
-        a, b = scale[k]
-        return a * src.out_buf[idx] + b
-
-    def pull_inputs() -> None:
-        if inst.n_in:
-            buf = inst.in_buf
-            for k, (src, idx) in enumerate(inst.in_sources):
-                buf[k] = value(k, src, idx)
-            inst.set_inputs()
-
-    def pull_changed_inputs() -> bool:
-        changed = False
-        buf = inst.in_buf
-        for k, (src, idx) in enumerate(inst.in_sources):
-            new = value(k, src, idx)
-            if buf[k] != new:
-                buf[k] = new
-                changed = True
-        if changed:
-            inst.set_inputs()
-        return changed
-
-    inst.pull_inputs = pull_inputs
-    inst.pull_changed_inputs = pull_changed_inputs
+    """Make `inst` take the inputs at these indices (of inst.inputs) converted: every
+    algorithm, the rollback and the divergence check then see the input in its own unit."""
+    inst.in_scales = [conversions.get(k, (1.0, 0.0)) for k in range(len(inst.inputs))]

@@ -21,7 +21,14 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2Real, fmi2ValueReference
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
 
-from sewfmu.scenarios.cosim.fmi_calls import FmiCallError, LogCollector, Status, failed, kind_of
+from sewfmu.scenarios.cosim.fmi_calls import (
+    WARNING_LEVEL,
+    FmiCallError,
+    LogCollector,
+    Status,
+    failed,
+    kind_of,
+)
 from sewfmu.scenarios.cosim.fmu_cache import extract_cached, is_cached
 from sewfmu.scenarios.cosim.pythonfmu_host import instantiating, release_at_exit
 from sewfmu.scenarios.format.values import ScenarioError
@@ -112,25 +119,31 @@ class Instance:
             group.append(var)
         return ("bool" if boolean else "real"), group.index(var)
 
-    def prepare(self) -> None:
-        """Preallocate the ctypes arrays for the batched calls of every step."""
-        def arrays(names, ctype):
+    def prepare(self, outputs=None) -> None:
+        """Preallocate the ctypes arrays for the batched calls of every step. `outputs`, if
+        given, is the part of a run's array of outputs (System.outputs, a numpy view) that this
+        instance's Real outputs are read into."""
+        def arrays(names, ctype, values=None):
             vrs = (fmi2ValueReference * len(names))(*[self.variables[n].valueReference
                                                       for n in names])
-            vals = (ctype * len(names))()
+            vals = (ctype * len(names))() if values is None else \
+                (ctype * len(names)).from_buffer(values)
             return vrs, vals, len(names)
 
-        self.out_vr, self.out_buf, self.n_out = arrays(self.real_out, fmi2Real)
+        self.out_vr, self.out_buf, self.n_out = arrays(self.real_out, fmi2Real, outputs)
         self.bool_vr, self.bool_buf, self.n_bool = arrays(self.bool_out, self.BOOLEAN)
         self.in_vr, self.in_buf, self.n_in = arrays([i for i, _, _ in self.inputs], fmi2Real)
+        # the outputs as C doubles, summed at every read without a copy (the finiteness check)
+        self.out_doubles = memoryview(self.out_buf).cast("B").cast("d")
         # where each input comes from: (source, index in its real outputs)
         self.in_sources = [(src, src.real_out.index(out)) for _, src, out in self.inputs]
-        # all from one source's outputs in a row (a linkage fed by the shaft): that slice of
-        # its buffer is copied at once
+        # all from one source's outputs in a row and in the same unit (a linkage fed by the
+        # shaft): that slice of its buffer is copied at once
         first = self.in_sources[0] if self.in_sources else None
         self.in_block = None
-        if first and all(src is first[0] and idx == first[1] + k
-                         for k, (src, idx) in enumerate(self.in_sources)):
+        if first and self.in_scales is None and all(
+                src is first[0] and idx == first[1] + k
+                for k, (src, idx) in enumerate(self.in_sources)):
             self.in_block = (first[0], first[1], first[1] + len(self.in_sources))
 
     # --- the life of the instance: the FMI calls -----------------------------------------------
@@ -138,6 +151,9 @@ class Instance:
     cached = False
     carried = None        # the pythonfmu package the FMU carries a copy of (pythonfmu_host.py)
     in_block = None       # (source, start, stop): the inputs are that slice of its outputs
+    # (factor, offset) per input taking its source's value to the input's unit, or None where
+    # every input is in its source's unit (scenarios/cosim/connection_units.py)
+    in_scales: list[tuple[float, float]] | None = None
 
     def instantiate(self) -> None:
         with instantiating(keep_bytecode=self.cached, carried=self.carried):
@@ -197,63 +213,81 @@ class Instance:
             self.failed = status >= Status.FATAL
             raise FmiCallError(call, status, self)
 
-    def pull_inputs(self) -> None:
-        if self.n_in:
-            buf = self.in_buf
+    def exchange(self, pull: bool = True, read: bool = True) -> None:
+        """Set the inputs from their sources' outputs now, then read the outputs: Jacobi's
+        exchange at every step, in one call per instance (the hot path of a run: each call
+        less is about 1 % of the master's own time; bench/floor.py). `pull_inputs` and
+        `read_outputs` are its two halves."""
+        if pull and self.n_in:
             block = self.in_block
             if block is not None:
                 src, start, stop = block
-                buf[:] = src.out_buf[start:stop]
+                self.in_buf[:] = src.out_buf[start:stop]
             else:
-                for k, (src, idx) in enumerate(self.in_sources):
-                    buf[k] = src.out_buf[idx]
-            status = self._set_reals()     # set_inputs(), one call less on the hot path
-            if status > Status.WARNING:
+                self.in_buf[:] = self.input_values()
+            status = self._set_reals()
+            if status > WARNING_LEVEL:
                 self.check("set inputs", status)
+        if not read:
+            return
+        if self.n_out:
+            status = self._get_reals()
+            if status > WARNING_LEVEL:
+                self.check("get outputs", status)
+            # a NaN or infinite output stops the run here, naming its FMU (sewfmu's FMUs log
+            # why; a getter cannot refuse), rather than in the FMU it would be passed to
+            if not math.isfinite(sum(self.out_doubles)):
+                self._refuse_non_finite_outputs()
+        if self.n_bool:
+            status = self._get_booleans()
+            if status > WARNING_LEVEL:
+                self.check("get Boolean outputs", status)
+
+    def pull_inputs(self) -> None:
+        """Set every connected input from its source's output now."""
+        self.exchange(read=False)
+
+    def read_outputs(self) -> None:
+        """Read the outputs the run reads every step."""
+        self.exchange(pull=False)
+
+    def input_values(self) -> list[float]:
+        """Each connected input's value now: its source's output, in the input's unit."""
+        if self.in_scales is None:
+            return [src.out_buf[idx] for src, idx in self.in_sources]
+        return [a * src.out_buf[idx] + b
+                for (src, idx), (a, b) in zip(self.in_sources, self.in_scales)]
 
     def pull_changed_inputs(self) -> bool:
         """Within one instant: set the inputs again only if a source's output changed (setting
         an input restarts its extrapolation, so the first setting at an instant is always
         made, by pull_inputs); whether any did."""
-        changed = False
-        buf = self.in_buf
-        for k, (src, idx) in enumerate(self.in_sources):
-            value = src.out_buf[idx]
-            if buf[k] != value:
-                buf[k] = value
-                changed = True
-        if changed:
-            self.set_inputs()
-        return changed
+        values = self.input_values()
+        if values == self.in_buf[:]:
+            return False
+        self.in_buf[:] = values
+        self.set_inputs()
+        return True
 
     def set_inputs(self) -> None:
         """Set every connected input to its value in in_buf."""
         status = self._set_reals()
-        if status > Status.WARNING:
+        if status > WARNING_LEVEL:
             self.check("set inputs", status)
 
-    def read_outputs(self) -> None:
-        if self.n_out:
-            status = self._get_reals()
-            if status > Status.WARNING:
-                self.check("get outputs", status)
-            # a NaN or infinite output stops the run here, naming its FMU (sewfmu's FMUs log
-            # why; a getter cannot refuse), rather than in the FMU it would be passed to
-            if not math.isfinite(sum(self.out_buf[:])):      # (a list first: faster)
-                bad = [n for n, x in zip(self.real_out, self.out_buf) if not math.isfinite(x)]
-                if bad:
-                    if not self.log.errors_of(self.name):
-                        self.log.lines.append(f"[ERROR] {self.name}: output {bad[0]} is "
-                                              f"{self.out_buf[self.real_out.index(bad[0])]}")
-                    raise FmiCallError("get outputs", Status.ERROR, self)
-        if self.n_bool:
-            status = self._get_booleans()
-            if status > Status.WARNING:
-                self.check("get Boolean outputs", status)
+    def _refuse_non_finite_outputs(self) -> None:
+        """Stop the run at an output that is NaN or infinite (the sum of finite outputs may
+        overflow without any being so: the run then goes on)."""
+        bad = [n for n, x in zip(self.real_out, self.out_buf) if not math.isfinite(x)]
+        if bad:
+            if not self.log.errors_of(self.name):
+                self.log.lines.append(f"[ERROR] {self.name}: output {bad[0]} is "
+                                      f"{self.out_buf[self.real_out.index(bad[0])]}")
+            raise FmiCallError("get outputs", Status.ERROR, self)
 
     def do_step(self, t: float, h: float) -> None:
         status = self._do_step(t, h)
-        if status > Status.WARNING:
+        if status > WARNING_LEVEL:
             self.check("doStep", status)
 
 

@@ -94,9 +94,7 @@ class Master:
         every = self.PROGRESS_EVERY
         with interrupt.deferred(), self:
             while not self.finished():
-                self.step()
-                if interrupt.pending:
-                    interrupt.raise_pending()
+                self.steps(every - self.k % every)        # up to the next report
                 if progress is not None and self.k % every == 0:
                     progress(*self.progress_point())
             result = self.result()
@@ -185,7 +183,8 @@ class Master:
         # kept at every step whatever record_every: the last revolution (for the advice)
         last = sc.last_revolution_start()
         dense = 0 if last is None else max(0, self.n_steps - int(last / self.h) + 1)
-        self.recorder = Recorder(system.columns, system.plan, rows, sc.source,
+        self.recorder = Recorder(system.columns, system.plan, system.outputs, rows,
+                                 sc.source,
                                  None if rows is None else (self.n_steps, self.every, dense))
         self.recorder.record(0.0)
         self._phase = "step"
@@ -193,23 +192,55 @@ class Master:
     def step(self) -> None:
         """One communication step: n_steps even steps of h end exactly at the stop time; a
         variable-step algorithm ends its last step there."""
-        variable = self.algorithm.variable_step
-        t = self.t if variable else self.k * self.h
-        limit = self.stop - t if variable else self.h
-        try:                       # (no context manager here: this is the hot path)
+        self.steps(1)
+
+    def steps(self, count: int) -> None:
+        """Up to `count` communication steps (fewer where the run ends). A signal received
+        within interrupt.deferred() stops them between two steps (interrupt.Interrupted)."""
+        if self.algorithm.variable_step:
+            for _ in range(count):
+                if self.finished():
+                    break
+                self._variable_step()
+                if interrupt.pending:
+                    interrupt.raise_pending()
+            return
+        # the fixed-step loop, what it uses bound once: the hot path of every run
+        advance, system, h, n, stop = (self.algorithm.advance, self.system, self.h,
+                                       self.n_steps, self.stop)
+        watch, record, every, dense_k = self.watch, self.recorder.record, self.every, self.dense_k
+        k = self.k
+        end = min(n, k + count)
+        while k < end:
+            t = k * h
+            try:                   # (no context manager here: this is the hot path)
+                advance(system, t, h)
+            except FmiCallError as err:
+                raise self._failure(err, err.when or f"from t = {t:g} to {t + h:g} s") from None
+            k += 1
+            self.k = k
+            # n_steps even steps of h end exactly at the stop time
+            self.t = t = stop if k == n else k * h
+            if watch is not None:
+                watch.check(t)
+            if k % every == 0 or k >= dense_k or k == n:
+                record(t)
+            if interrupt.pending:
+                interrupt.raise_pending()
+
+    def _variable_step(self) -> None:
+        """One step of an algorithm that sizes its own: it ends its last step at the stop time."""
+        t = self.t
+        limit = self.stop - t
+        try:
             taken = self.algorithm.advance(self.system, t, limit)
         except FmiCallError as err:
             raise self._failure(err, err.when or f"from t = {t:g} to {t + limit:g} s") from None
         self.k += 1
-        if variable:
-            self.t = t + taken if t + taken < self.stop * (1 - 1e-12) else self.stop
-            dense = self.t >= self.dense_t
-        else:
-            self.t = self.stop if self.k == self.n_steps else self.k * self.h
-            dense = self.k >= self.dense_k
+        self.t = t + taken if t + taken < self.stop * (1 - 1e-12) else self.stop
         if self.watch is not None:
             self.watch.check(self.t)
-        if self.k % self.every == 0 or dense or self.finished():
+        if self.t >= self.dense_t or self.finished() or self.k % self.every == 0:
             self.recorder.record(self.t)
 
     def save_state(self) -> Snapshot:

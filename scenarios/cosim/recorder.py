@@ -61,38 +61,44 @@ def check_memory(rows: int, columns: int, source: str, what: str = "records",
 
 
 class Recorder:
-    """Rows of (time, the planned columns), read from the instances' output buffers.
+    """Rows of (time, every output the instances read each step), from which `arrays` gives the
+    planned columns.
 
-    `plan` is a list of (instance, "real" or "bool", index in that instance's buffer), one per
-    column. `rows`: the number of rows the run will record, or None to grow as needed."""
+    A row is copied at once, not value by value: the Real outputs from the array the instances
+    read them into (System.outputs), the Boolean ones from each instance's buffer that holds a
+    recorded one. `plan` is a list of (instance, "real" or "bool", index in that instance's
+    buffer), one per column; a Real output's place in `outputs` is the instance's out_at plus its
+    index. `rows`: the number of rows the run will record, or None to grow as needed."""
 
-    def __init__(self, columns: list[str], plan: list, rows: int | None, source: str,
-                 thinning: tuple[int, int, int] | None = None):
+    def __init__(self, columns: list[str], plan: list, outputs: np.ndarray, rows: int | None,
+                 source: str, thinning: tuple[int, int, int] | None = None):
         self.columns = columns
         self.plan = plan
         self.source = source
-        self.limit = max_rows(len(columns))
+        self.outputs = outputs
+        flagged = list(dict.fromkeys(inst for inst, kind, _ in plan if kind == "bool"))
+        self._flag_of = {inst: k for k, inst in enumerate(flagged)}
+        # each of those instances' Boolean outputs as a numpy view of its buffer
+        self._flags_now = [np.ctypeslib.as_array(inst.bool_buf) for inst in flagged]
+        width = len(outputs) + sum(len(now) for now in self._flags_now)
+        self.limit = max_rows(width)
         if rows is not None:
-            check_memory(rows, len(columns), source, thinning=thinning)
+            check_memory(rows, width, source, thinning=thinning)
         self.grows = rows is None
         size = min(GROWN_ROWS, self.limit) if rows is None else rows
         self.times = np.empty(size)
-        self.data = np.empty((size, len(columns)))
+        self.reals = np.empty((size, len(outputs)))
+        self.flags = [np.empty((size, len(now)), now.dtype) for now in self._flags_now]
         self.length = 0
-        self._cells: list | None = None
 
     def record(self, t: float) -> None:
         row = self.length
         if row == len(self.times):
             self._grow(t)
         self.times[row] = t
-        # the row filled at once, from each column's buffer and place (fixed once the
-        # instances are prepared: _cells)
-        cells = self._cells
-        if cells is None:
-            cells = self._cells = [(inst.out_buf if kind == "real" else inst.bool_buf, idx)
-                                   for inst, kind, idx in self.plan]
-        self.data[row] = [buf[idx] for buf, idx in cells]
+        self.reals[row] = self.outputs
+        for rows, now in zip(self.flags, self._flags_now):
+            rows[row] = now
         self.length = row + 1
 
     def _grow(self, t: float) -> None:
@@ -102,14 +108,20 @@ class Recorder:
                                 f"experiment.record_every, or a looser tolerance")
         size = min(self.limit, 2 * len(self.times))
         self.times = np.resize(self.times, size)
-        self.data = np.resize(self.data, (size, len(self.columns)))
+        self.reals = np.resize(self.reals, (size, self.reals.shape[1]))
+        self.flags = [np.resize(rows, (size, rows.shape[1])) for rows in self.flags]
 
     def truncate(self, length: int) -> None:
         """Forget the rows from `length` on (a rollback to the point they were at)."""
         self.length = length
 
     def arrays(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """(time, {column: values}), copies of the rows recorded."""
+        """(time, {column: values}), copies of the rows recorded (a Boolean as 0.0 or 1.0)."""
         rows = slice(0, self.length)
-        return (self.times[rows].copy(),
-                {c: self.data[rows, j].copy() for j, c in enumerate(self.columns)})
+        columns = {}
+        for column, (inst, kind, idx) in zip(self.columns, self.plan):
+            if kind == "real":
+                columns[column] = self.reals[rows, inst.out_at + idx].copy()
+            else:
+                columns[column] = self.flags[self._flag_of[inst]][rows, idx].astype(float)
+        return self.times[rows].copy(), columns

@@ -11,6 +11,8 @@ import warnings
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.cosim.connection_units import conversion, convert_inputs
 from sewfmu.scenarios.cosim.divergence import bound_text, declared_bound
@@ -87,8 +89,14 @@ class System:
             self.plan.append((by_name[name], kind, idx))
             self.units[col] = by_name[name].variables[var].unit or ""
         self.columns = wanted
+        # every instance's Real outputs side by side in one array, each instance reading into
+        # its part: the recorder copies a step's outputs at once (cosim/recorder.py)
+        self.outputs = np.zeros(sum(len(inst.real_out) for inst in self.instances))
+        at = 0
         for inst in self.instances:
-            inst.prepare()
+            inst.out_at = at
+            inst.prepare(self.outputs[at:at + len(inst.real_out)])
+            at += len(inst.real_out)
 
 
 def check_parameters(scenario: Scenario, descriptions: dict) -> None:

@@ -5,6 +5,7 @@ wings, so that either reads it without the other."""
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 
 # the files' (path, inode, size, mtime) -> their hash, for this process's lifetime: a run (and
@@ -13,18 +14,24 @@ from pathlib import Path
 _SEEN: dict[tuple, str] = {}
 
 
-def _signature(path: Path) -> tuple:
-    st = path.stat()
-    return str(path), st.st_ino, st.st_size, st.st_mtime_ns
+def _python_files(folder: Path) -> list[tuple[str, str]]:
+    """(name, path) of each .py file in the folder, by name (os.scandir and strings: a run lists
+    its code folders twice, and pathlib's glob and sorting cost 0.5 ms each time)."""
+    try:
+        with os.scandir(folder) as entries:
+            return sorted((e.name, e.path) for e in entries if e.name.endswith(".py"))
+    except FileNotFoundError:
+        return []
 
 
 def hash_of(*folders: Path) -> str:
-    files = [path for folder in folders for path in sorted(Path(folder).glob("*.py"))]
-    key = tuple(_signature(path) for path in files)
+    files = [file for folder in folders for file in _python_files(folder)]
+    key = tuple((path, st.st_ino, st.st_size, st.st_mtime_ns)
+                for path, st in ((path, os.stat(path)) for _, path in files))
     if key not in _SEEN:
         digest = hashlib.sha256()
-        for path in files:
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
+        for name, path in files:
+            digest.update(name.encode())
+            digest.update(Path(path).read_bytes())
         _SEEN[key] = digest.hexdigest()[:12]
     return _SEEN[key]

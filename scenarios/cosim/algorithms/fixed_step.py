@@ -15,7 +15,7 @@ exchanges and steps; the run loop is scenarios/cosim/master.py's.
 from __future__ import annotations
 
 from sewfmu.scenarios.cosim.algorithms.base import Algorithm
-from sewfmu.scenarios.cosim.fmi_calls import Status
+from sewfmu.scenarios.cosim.fmi_calls import WARNING_LEVEL
 from sewfmu.scenarios.format.master_settings import GaussSeidelSettings, JacobiSettings
 from sewfmu.scenarios.format.values import ScenarioError
 
@@ -25,13 +25,13 @@ class Jacobi(Algorithm):
     Settings = JacobiSettings
 
     def advance(self, system, t, h):
-        # inst.do_step(t, h) written out: this loop runs every step (a call less per instance,
-        # about 5 % of the master's own time on punch_drive; bench/floor.py)
-        for inst in system.instances:
+        # inst.do_step(t, h) written out: this loop runs every step (a call less per instance)
+        instances = system.instances
+        for inst in instances:
             status = inst._do_step(t, h)
-            if status > Status.WARNING:
+            if status > WARNING_LEVEL:
                 inst.check("doStep", status)
-        self.exchange(system, system.instances)
+        self.exchange(system, instances)
         return h
 
     @staticmethod
@@ -39,8 +39,7 @@ class Jacobi(Algorithm):
         """Every input from its source's outputs now (dependency order: along a chain
         feedthrough settles in one pass; around a loop in one more pass per instance on it)."""
         for inst in instances:
-            inst.pull_inputs()
-            inst.read_outputs()
+            inst.exchange()
         if system.in_loops:
             system.settle_loops()
 

@@ -129,8 +129,7 @@ class Iterative(Jacobi):
         for inst in self.before:
             inst.do_step(t, h)
         for inst in self.before:
-            inst.pull_inputs()
-            inst.read_outputs()
+            inst.exchange()
         self.rollback.save()
         start = np.array([c.instance.in_buf[c.value] for c in self.pairs])
         rate = np.array([c.instance.in_buf[c.rate] for c in self.pairs])
