@@ -12,9 +12,11 @@ calls a step), every variant checked to give the identical F2 series (np.array_e
 3. each FMU's cost per step in plain fmpy (set its inputs from a recorded series, doStep, get
    its outputs: the calls of the minimal loop), for the FMUs built from the code before issue
    38 (commit 190f0c1, `--before DIR`, built there if missing) and for today's;
-4. a sweep point (a worker's seconds per point) against a standalone run of that point.
+4. a sweep point (a worker's seconds per point) against a standalone run of that point;
+5. with --instructions (valgrind): the warm runs of 1. by instruction count, which a shared
+   machine's load does not move.
 
-    .venv/bin/python bench/floor.py [--repeat N] [--before DIR]
+    .venv/bin/python bench/floor.py [--repeat N] [--before DIR] [--instructions]
 """
 from __future__ import annotations
 
@@ -400,13 +402,60 @@ def sweep_point(repeat: int) -> None:
           f"{alone:.3f} s | {per_point / alone:.3f} | ≤ 0.15 |")
 
 
+# The warm comparison by instruction count (valgrind's callgrind), which the load of a shared
+# machine does not move: each side runs twice to warm up, then once inside qsort's comparison
+# callback, so that --toggle-collect counts that run alone.
+COUNTED = r'''
+import ctypes, sys
+sys.path.insert(0, sys.argv[2])
+import floor, sewfmu
+sc, paths, n, h, stop = floor._punch_drive()
+prepared = floor.prepare(paths)
+run = {"minimal": lambda: floor.minimal_run(prepared, n, h, stop),
+       "sewfmu": lambda: sewfmu.run("punch_drive", {"experiment.accuracy": "off"})}[sys.argv[1]]
+run(); run()
+compare = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)(
+    lambda a, b: (run(), 0)[1])
+ctypes.CDLL(None).qsort((ctypes.c_int * 2)(1, 2), 2, ctypes.sizeof(ctypes.c_int), compare)
+'''
+
+
+def instructions() -> None:
+    """Instructions of one warm run of each side, counted by callgrind."""
+    import re
+    import shutil
+
+    if not shutil.which("valgrind"):
+        print("\n5. instructions: valgrind is not installed (apt install valgrind)")
+        return
+    counts = {}
+    with tempfile.TemporaryDirectory(prefix="sewfmu_floor_") as tmp:
+        script = Path(tmp) / "counted.py"
+        script.write_text(COUNTED)
+        for side in ("minimal", "sewfmu"):
+            proc = subprocess.run(
+                ["valgrind", "--tool=callgrind", "--collect-atstart=no",
+                 "--toggle-collect=*qsort*", f"--callgrind-out-file={tmp}/{side}.out",
+                 sys.executable, str(script), side, str(ROOT / "bench")],
+                capture_output=True, text=True, env=ENV, check=True)
+            counts[side] = int(re.search(r"Collected : (\d+)", proc.stderr).group(1))
+    print("\n5. warm, by instruction count (callgrind; one run of each side after two):")
+    print("| side | instructions | × minimal loop | target |")
+    print("|---|---|---|---|")
+    print(f"| minimal fmpy loop, whole run | {counts['minimal'] / 1e9:.3f} G | 1.000 | |")
+    print(f"| sewfmu.run, accuracy estimate off | {counts['sewfmu'] / 1e9:.3f} G | "
+          f"**{counts['sewfmu'] / counts['minimal']:.3f}** | ≤ 1.05 |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--before", default=str(Path(tempfile.gettempdir())
                                                  / "sewfmu_fmus_190f0c1"),
                         help="FMUs built from the code before issue 38 (built there if missing)")
-    parser.add_argument("--only", choices=("warm", "whole", "fmus", "sweep"))
+    parser.add_argument("--only", choices=("warm", "whole", "fmus", "sweep", "instructions"))
+    parser.add_argument("--instructions", action="store_true",
+                        help="also count the warm runs' instructions under valgrind (2 minutes)")
     args = parser.parse_args()
     print(f"sewfmu floor benchmark, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
           f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}\n")
@@ -421,6 +470,8 @@ def main() -> None:
         per_fmu(args.repeat, before)
     if args.only in (None, "sweep"):
         sweep_point(args.repeat)
+    if args.only == "instructions" or (args.only is None and args.instructions):
+        instructions()
 
 
 if __name__ == "__main__":
