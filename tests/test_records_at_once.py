@@ -1,14 +1,21 @@
 """A step's outputs recorded at once (cosim/recorder.py: one copy from the array the instances
-read their Real outputs into, one per instance with Boolean outputs), against the closed form of
-what Jacobi computes on the fake oscillator (tests/test_master_loop.py's system): a narrowed and
-reordered record, an output read for a connection but not recorded, FMI 2.0's and FMI 3.0's
-Boolean types, and the run taken in stretches of any length."""
+read their Real outputs into, one per instance with Boolean outputs) or, for a narrowed record,
+value by value, against the closed form of what Jacobi computes on the fake oscillator
+(tests/test_master_loop.py's system): every column, a narrowed and reordered record with an
+output read for a connection but not recorded, FMI 2.0's and FMI 3.0's Boolean types, the memory
+a narrowed record takes, and the run taken in stretches of any length."""
 import ctypes
+import subprocess
+import sys
+import textwrap
 
 import numpy as np
 import pytest
 
+from sewfmu.scenarios.cosim import recorder
+from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.cosim.master import Master
+from sewfmu.scenarios.format.values import ScenarioError
 from tests.fake_fmu import Integrator, Switch, fake_scenario, maker
 
 M = np.array([[0.0, 1.0], [-1.0, 0.0]])
@@ -44,19 +51,37 @@ def _taylor(n: int) -> np.ndarray:
 
 
 @pytest.mark.parametrize("boolean", [ctypes.c_int, ctypes.c_bool], ids=["fmi2", "fmi3"])
-def test_a_narrowed_reordered_record_holds_each_column_where_it_belongs(boolean):
-    # b.x_dot feeds a.u_dot but is not recorded; the Boolean comes first
-    master, _ = _system(["s.on", "b.x", "s.y", "a.x"], boolean)
+@pytest.mark.parametrize("record", [None, ["s.on", "b.x", "s.y", "a.x"]],
+                         ids=["every output, at once", "narrowed, value by value"])
+def test_each_column_holds_its_own_values(boolean, record):
+    # narrowed: b.x_dot feeds a.u_dot but is not recorded, and the Boolean comes first
+    master, _ = _system(record, boolean)
     result = master.run()
-    assert list(result.columns) == ["s.on", "b.x", "s.y", "a.x"]
+    assert master.recorder.at_once == (record is None)
+    if record:
+        assert list(result.columns) == record
     z = _taylor(len(result.time) - 1)
     np.testing.assert_allclose(result["a.x"], z[:, 0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(result["b.x"], z[:, 1], rtol=0, atol=1e-12)
+    if record is None:                            # the rates: x_dot = gain · u
+        np.testing.assert_array_equal(result["a.x_dot"], result["b.x"])
+        np.testing.assert_array_equal(result["b.x_dot"], -result["a.x"])
     # the switch passes on where a.x will be at the end of its step, and is on from 0 up
     on = result["s.on"]
     assert set(np.unique(on)) == {0.0, 1.0} and on.dtype == float
     np.testing.assert_array_equal(on, (result["s.y"] >= 0.0).astype(float))
     assert np.count_nonzero(np.diff(on)) >= 2                     # the oscillation crosses 0
+
+
+def test_a_narrowed_record_takes_the_memory_of_its_own_columns(monkeypatch):
+    # 71 rows: every output (6 columns and time) 3,976 bytes, a.x alone 1,136
+    monkeypatch.setattr(recorder, "RECORD_BUDGET", 2000)
+    master, _ = _system(["a.x"])
+    result = master.run()
+    np.testing.assert_allclose(result["a.x"], _taylor(70)[:, 0], rtol=0, atol=1e-12)
+    master, _ = _system(None)
+    with pytest.raises(ScenarioError, match=r"71 points × 7 columns"):
+        master.run()
 
 
 @pytest.mark.parametrize("stretch", [1, 3, 7, 1000])
@@ -84,3 +109,48 @@ def test_records_are_copies_the_next_step_does_not_change():
         again = master.result()["a.x"]
     np.testing.assert_array_equal(again[:len(first)], first)
     assert len(again) == len(first) + 10
+
+
+@pytest.mark.parametrize("count", [2.5, "3", None, -1])
+def test_a_number_of_steps_that_is_not_one_is_refused_in_one_line(count):
+    master, _ = _system(None)
+    with master:
+        with pytest.raises(ScenarioError, match=r"Master\.steps\(.*\): the number of steps"):
+            master.steps(count)
+        master.steps(np.int64(3))          # numpy's whole numbers are whole numbers
+        assert master.k == 3
+
+
+def test_stepping_outside_the_open_run_is_refused_not_made():
+    master, _ = _system(None)
+    with pytest.raises(CosimError, match=r"Master\.step.*the run is not open"):
+        master.step()
+    with pytest.raises(CosimError, match=r"the run is not open"):
+        master.finished()
+    with master:
+        master.steps(3)
+    for call in (master.step, master.save_state, lambda: master.steps(2)):
+        with pytest.raises(CosimError, match=r"the run is not open"):
+            call()
+    assert master.k == 3 and len(master.result().time) == 4
+
+
+def test_a_step_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
+    # a call on a freed pythonfmu instance ended the process with SIGSEGV
+    script = textwrap.dedent("""
+        import sys
+        import sewfmu
+        from sewfmu.scenarios.cosim.master import Master
+        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+        sc = sewfmu.load("punch_drive")
+        with Master(sc, fmus_for(sc)) as master:
+            master.steps(10)
+        try:
+            master.step()
+        except sewfmu.Error as err:
+            print(err)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "the run is not open" in proc.stdout

@@ -13,6 +13,7 @@ execution, algorithm and observer.
 from __future__ import annotations
 
 import contextlib
+import operator
 import time as clock
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -80,6 +81,7 @@ class Master:
         self.system: System | None = None
         self.algorithm = None
         self._snapshots: list[Snapshot] = []
+        self._open = False           # between a whole open() and close(): FMU calls may be made
 
     @property
     def instances(self) -> list:
@@ -102,6 +104,8 @@ class Master:
         return result
 
     def finished(self) -> bool:
+        if self.algorithm is None:
+            self._require_open("finished")
         if self.algorithm.variable_step:
             return self.t >= self.stop * (1 - 1e-12)
         return self.k >= self.n_steps
@@ -183,11 +187,12 @@ class Master:
         # kept at every step whatever record_every: the last revolution (for the advice)
         last = sc.last_revolution_start()
         dense = 0 if last is None else max(0, self.n_steps - int(last / self.h) + 1)
-        self.recorder = Recorder(system.columns, system.plan, system.outputs, rows,
-                                 sc.source,
-                                 None if rows is None else (self.n_steps, self.every, dense))
+        self.recorder = Recorder(system.columns, system.plan, rows, sc.source,
+                                 None if rows is None else (self.n_steps, self.every, dense),
+                                 outputs=system.outputs)
         self.recorder.record(0.0)
         self._phase = "step"
+        self._open = True
 
     def step(self) -> None:
         """One communication step: n_steps even steps of h end exactly at the stop time; a
@@ -197,6 +202,15 @@ class Master:
     def steps(self, count: int) -> None:
         """Up to `count` communication steps (fewer where the run ends). A signal received
         within interrupt.deferred() stops them between two steps (interrupt.Interrupted)."""
+        self._require_open("steps")
+        try:
+            count = operator.index(count)
+        except TypeError:
+            raise ScenarioError(f"Master.steps({count!r}): the number of steps is a whole "
+                                f"number") from None
+        if count < 0:
+            raise ScenarioError(f"Master.steps({count}): the number of steps cannot be "
+                                f"negative")
         if self.algorithm.variable_step:
             for _ in range(count):
                 if self.finished():
@@ -243,8 +257,16 @@ class Master:
         if self.t >= self.dense_t or self.finished() or self.k % self.every == 0:
             self.recorder.record(self.t)
 
+    def _require_open(self, call: str) -> None:
+        """Refuse a call that would reach the FMUs before the run is opened or after it is
+        closed (its instances freed: a call on them is undefined, a crash with pythonfmu's)."""
+        if not self._open:
+            raise CosimError(f"Master.{call}(): the run is not open: call it within "
+                             f"`with Master(scenario, fmus) as master:`")
+
     def save_state(self) -> Snapshot:
         """The state of every FMU and of the run: `restore_state` comes back to it."""
+        self._require_open("save_state")
         states = Rollback(self.instances)
         self._snapshots.append(states)
         with self._reporting(self.t):
@@ -252,6 +274,7 @@ class Master:
         return Snapshot(self.k, self.t, self.recorder.length, states)
 
     def restore_state(self, snapshot: Snapshot) -> None:
+        self._require_open("restore_state")
         self.k, self.t = snapshot.k, snapshot.t
         self.recorder.truncate(snapshot.rows)
         with self._reporting(self.t):
@@ -264,6 +287,7 @@ class Master:
                          coupling, dict(self.system.units))
 
     def close(self) -> None:
+        self._open = False
         if self.algorithm is not None:
             self.algorithm.close()
         while self._snapshots:

@@ -61,37 +61,57 @@ def check_memory(rows: int, columns: int, source: str, what: str = "records",
 
 
 class Recorder:
-    """Rows of (time, every output the instances read each step), from which `arrays` gives the
-    planned columns.
+    """Rows of (time, the planned columns), read from the instances' output buffers.
 
-    A row is copied at once, not value by value: the Real outputs from the array the instances
-    read them into (System.outputs), the Boolean ones from each instance's buffer that holds a
-    recorded one. `plan` is a list of (instance, "real" or "bool", index in that instance's
-    buffer), one per column; a Real output's place in `outputs` is the instance's out_at plus its
-    index. `rows`: the number of rows the run will record, or None to grow as needed."""
+    `plan` is a list of (instance, "real" or "bool", index in that instance's buffer), one per
+    column; `outputs`, if given, is the array every instance reads its Real outputs into
+    (System.outputs: an instance's start in it is its out_at). `rows`: the number of rows the
+    run will record, or None to grow as needed.
 
-    def __init__(self, columns: list[str], plan: list, outputs: np.ndarray, rows: int | None,
-                 source: str, thinning: tuple[int, int, int] | None = None):
+    Where the columns are every output the instances read (a run records every output unless
+    its scenario narrows `record`), a row is copied at once: the Real outputs from `outputs`, the
+    Boolean ones from each instance's buffer (bench/floor.py: a third of the master's own time
+    per step, value by value). Otherwise value by value, so that the records never hold more
+    than their columns."""
+
+    def __init__(self, columns: list[str], plan: list, rows: int | None, source: str,
+                 thinning: tuple[int, int, int] | None = None,
+                 outputs: np.ndarray | None = None):
         self.columns = columns
         self.plan = plan
         self.source = source
-        self.outputs = outputs
-        flagged = list(dict.fromkeys(inst for inst, kind, _ in plan if kind == "bool"))
-        self._flag_of = {inst: k for k, inst in enumerate(flagged)}
-        # each of those instances' Boolean outputs as a numpy view of its buffer
-        self._flags_now = [np.ctypeslib.as_array(inst.bool_buf) for inst in flagged]
-        width = len(outputs) + sum(len(now) for now in self._flags_now)
-        self.limit = max_rows(width)
+        self.limit = max_rows(len(columns))
         if rows is not None:
-            check_memory(rows, width, source, thinning=thinning)
+            check_memory(rows, len(columns), source, thinning=thinning)
         self.grows = rows is None
         size = min(GROWN_ROWS, self.limit) if rows is None else rows
         self.times = np.empty(size)
-        self.reals = np.empty((size, len(outputs)))
-        self.flags = [np.empty((size, len(now)), now.dtype) for now in self._flags_now]
         self.length = 0
+        flagged = list(dict.fromkeys(inst for inst, kind, _ in plan if kind == "bool"))
+        whole = outputs is not None \
+            and sum(kind == "real" for _, kind, _ in plan) == len(outputs) \
+            and all(sum(i is inst and kind == "bool" for i, kind, _ in plan) == inst.n_bool
+                    for inst in flagged)
+        if whole:
+            self.outputs = outputs
+            self.reals = np.empty((size, len(outputs)))
+            self._flag_of = {inst: k for k, inst in enumerate(flagged)}
+            # each of those instances' Boolean outputs as a numpy view of its buffer
+            self._flags_now = [np.ctypeslib.as_array(inst.bool_buf) for inst in flagged]
+            self.flags = [np.empty((size, len(now)), now.dtype) for now in self._flags_now]
+            self.record = self._record_at_once
+        else:
+            self.data = np.empty((size, len(columns)))
+            self._cells = [(inst.out_buf if kind == "real" else inst.bool_buf, idx)
+                           for inst, kind, idx in plan]
+            self.record = self._record_values
+        self.at_once = whole
 
     def record(self, t: float) -> None:
+        """Record the outputs read now as the row of time t."""
+        raise NotImplementedError          # one of the two below, chosen in __init__
+
+    def _record_at_once(self, t: float) -> None:
         row = self.length
         if row == len(self.times):
             self._grow(t)
@@ -101,6 +121,14 @@ class Recorder:
             rows[row] = now
         self.length = row + 1
 
+    def _record_values(self, t: float) -> None:
+        row = self.length
+        if row == len(self.times):
+            self._grow(t)
+        self.times[row] = t
+        self.data[row] = [buf[idx] for buf, idx in self._cells]
+        self.length = row + 1
+
     def _grow(self, t: float) -> None:
         if not self.grows or self.length >= self.limit:
             raise ScenarioError(f"{self.source}: the records reached {self.length:,} points at "
@@ -108,8 +136,11 @@ class Recorder:
                                 f"experiment.record_every, or a looser tolerance")
         size = min(self.limit, 2 * len(self.times))
         self.times = np.resize(self.times, size)
-        self.reals = np.resize(self.reals, (size, self.reals.shape[1]))
-        self.flags = [np.resize(rows, (size, rows.shape[1])) for rows in self.flags]
+        if self.at_once:
+            self.reals = np.resize(self.reals, (size, self.reals.shape[1]))
+            self.flags = [np.resize(rows, (size, rows.shape[1])) for rows in self.flags]
+        else:
+            self.data = np.resize(self.data, (size, len(self.columns)))
 
     def truncate(self, length: int) -> None:
         """Forget the rows from `length` on (a rollback to the point they were at)."""
@@ -118,6 +149,9 @@ class Recorder:
     def arrays(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """(time, {column: values}), copies of the rows recorded (a Boolean as 0.0 or 1.0)."""
         rows = slice(0, self.length)
+        if not self.at_once:
+            return (self.times[rows].copy(),
+                    {c: self.data[rows, j].copy() for j, c in enumerate(self.columns)})
         columns = {}
         for column, (inst, kind, idx) in zip(self.columns, self.plan):
             if kind == "real":
