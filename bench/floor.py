@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -164,10 +165,9 @@ minimal_run(prepare(paths, unzipped), n, h, stop, csv=Path(sys.argv[7]) / "resul
 '''
 
 
-def _best_alternating(funcs, repeat: int) -> list[float]:
-    """The best (shortest) CPU time of each function over `repeat` alternated rounds: on a
-    shared machine the other processes' load only ever adds, and alternating spreads its
-    drift."""
+def _alternating(funcs, repeat: int) -> list[list[float]]:
+    """The CPU times of each function over `repeat` alternated rounds (after one round to warm
+    up): alternating spreads the drift of a shared machine's load over every function."""
     for f in funcs:
         f()
     times = [[] for _ in funcs]
@@ -176,7 +176,19 @@ def _best_alternating(funcs, repeat: int) -> list[float]:
             start = CLOCK()
             f()
             times[k].append(CLOCK() - start)
-    return [min(t) for t in times]
+    return times
+
+
+def _best_alternating(funcs, repeat: int) -> list[float]:
+    """The best (shortest) CPU time of each function over `repeat` alternated rounds: on a
+    shared machine the other processes' load only ever adds."""
+    return [min(t) for t in _alternating(funcs, repeat)]
+
+
+def _paired(times: list[list[float]], k: int) -> float:
+    """The median over the rounds of function k's time over function 0's in the same round:
+    each ratio of two runs made back to back, under the same load."""
+    return statistics.median(t / t0 for t, t0 in zip(times[k], times[0]))
 
 
 def _punch_drive():
@@ -210,21 +222,24 @@ def warm(repeat: int) -> dict:
             m.steps(m.n_steps)          # the run's own loop, without progress reports
             loops["master"].append(CLOCK() - start)
 
-    t_min, t_off, t_on, _ = _best_alternating(
+    times = _alternating(
         [minimal, lambda: sewfmu.run("punch_drive", {"experiment.accuracy": "off"}),
          lambda: sewfmu.run("punch_drive"), master_loop], repeat)
+    t_min, t_off, t_on, _ = (min(t) for t in times)
     loop_min = min(loops["minimal"]) / n * 1e6
     loop_master = min(loops["master"]) / n * 1e6
-    print(f"1. warm, one process, punch_drive ({n} steps), identical F2 series:")
-    print("| measure | seconds | × minimal loop | target |")
+    print(f"1. warm, one process, punch_drive ({n} steps), identical F2 series; the best of "
+          f"{repeat} alternated rounds, and the median of the rounds' own ratios:")
+    print("| measure | seconds | × minimal loop: best / median of rounds | target |")
     print("|---|---|---|---|")
     print(f"| minimal fmpy loop, whole run (load, initialize, step, free) | {t_min:.3f} | 1.00 | |")
     print(f"| sewfmu.run, accuracy estimate off (experiment.accuracy = \"off\": like for like) "
-          f"| {t_off:.3f} | **{t_off / t_min:.2f}** | ≤ 1.05 |")
+          f"| {t_off:.3f} | **{t_off / t_min:.2f} / {_paired(times, 1):.2f}** | ≤ 1.05 |")
     print(f"| sewfmu.run as by default (with its accuracy estimate: a second, coarser run) "
-          f"| {t_on:.3f} | {t_on / t_min:.2f} | |")
+          f"| {t_on:.3f} | {t_on / t_min:.2f} / {_paired(times, 2):.2f} | |")
     print(f"| step loop, µs per step: sewfmu's master {loop_master:.1f}, minimal loop "
-          f"{loop_min:.1f} | | {loop_master / loop_min:.2f} | |")
+          f"{loop_min:.1f} | | {loop_master / loop_min:.2f} / "
+          f"{statistics.median(a / b for a, b in zip(loops['master'][1:], loops['minimal'][1:])):.2f} | |")
     return {"minimal": t_min, "off": t_off, "on": t_on}
 
 
