@@ -178,6 +178,7 @@ def test_run_tells_its_progress_to_a_function():
                progress=lambda done, total: heard.append((done, total)))
     assert heard and all(0 <= done <= total for done, total in heard)
     assert all(b >= a for (a, _), (b, _) in zip(heard, heard[1:]))
+    assert heard[-1][0] == heard[-1][1]              # the end is reported too
 
 
 def test_sweep_tells_each_point_as_it_finishes():

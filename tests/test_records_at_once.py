@@ -3,17 +3,13 @@ read their Real outputs into, one per instance with Boolean outputs) or, for a n
 value by value, against the closed form of what Jacobi computes on the fake oscillator
 (tests/test_master_loop.py's system): every column, a narrowed and reordered record with an
 output read for a connection but not recorded, FMI 2.0's and FMI 3.0's Boolean types, the memory
-a narrowed record takes, and the run taken in stretches of any length."""
+a narrowed record takes, and the run taken in stretches of any length (Master.steps)."""
 import ctypes
-import subprocess
-import sys
-import textwrap
 
 import numpy as np
 import pytest
 
 from sewfmu.scenarios.cosim import recorder
-from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.format.values import ScenarioError
 from tests.fake_fmu import Integrator, Switch, fake_scenario, maker
@@ -24,7 +20,7 @@ CONNECTIONS = ["b.x -> a.u", "b.x_dot -> a.u_dot", "a.x -> b.u", "a.x_dot -> b.u
 STOP, STEP = 7.0, 0.1
 
 
-def _system(record, boolean=None):
+def _system(record, boolean=None, master="jacobi"):
     models = {"a": Integrator(gain=1.0, x0=1.0), "b": Integrator(gain=-1.0),
               "s": Switch(at=0.0)}
     made = {}
@@ -36,7 +32,7 @@ def _system(record, boolean=None):
             inst.BOOLEAN = boolean
         return inst
 
-    sc = fake_scenario(models, CONNECTIONS, STOP, STEP)
+    sc = fake_scenario(models, CONNECTIONS, STOP, STEP, master)
     sc.record = record
     return Master(sc, {}, make_instance=make_with), made
 
@@ -109,48 +105,3 @@ def test_records_are_copies_the_next_step_does_not_change():
         again = master.result()["a.x"]
     np.testing.assert_array_equal(again[:len(first)], first)
     assert len(again) == len(first) + 10
-
-
-@pytest.mark.parametrize("count", [2.5, "3", None, -1])
-def test_a_number_of_steps_that_is_not_one_is_refused_in_one_line(count):
-    master, _ = _system(None)
-    with master:
-        with pytest.raises(ScenarioError, match=r"Master\.steps\(.*\): the number of steps"):
-            master.steps(count)
-        master.steps(np.int64(3))          # numpy's whole numbers are whole numbers
-        assert master.k == 3
-
-
-def test_stepping_outside_the_open_run_is_refused_not_made():
-    master, _ = _system(None)
-    with pytest.raises(CosimError, match=r"Master\.step.*the run is not open"):
-        master.step()
-    with pytest.raises(CosimError, match=r"the run is not open"):
-        master.finished()
-    with master:
-        master.steps(3)
-    for call in (master.step, master.save_state, lambda: master.steps(2)):
-        with pytest.raises(CosimError, match=r"the run is not open"):
-            call()
-    assert master.k == 3 and len(master.result().time) == 4
-
-
-def test_a_step_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
-    # a call on a freed pythonfmu instance ended the process with SIGSEGV
-    script = textwrap.dedent("""
-        import sys
-        import sewfmu
-        from sewfmu.scenarios.cosim.master import Master
-        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
-        sc = sewfmu.load("punch_drive")
-        with Master(sc, fmus_for(sc)) as master:
-            master.steps(10)
-        try:
-            master.step()
-        except sewfmu.Error as err:
-            print(err)
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert "the run is not open" in proc.stdout

@@ -58,6 +58,7 @@ class Snapshot(NamedTuple):
     t: float
     rows: int
     states: Rollback
+    run: object            # the open run it was saved in: only that run comes back to it
 
 
 def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunResult:
@@ -81,7 +82,9 @@ class Master:
         self.system: System | None = None
         self.algorithm = None
         self._snapshots: list[Snapshot] = []
-        self._open = False           # between a whole open() and close(): FMU calls may be made
+        # the run now open (between a whole open() and close(): FMU calls may be made), or None
+        self._run: object | None = None
+        self.recorder: Recorder | None = None      # made by open(); read by result() after close
 
     @property
     def instances(self) -> list:
@@ -90,22 +93,21 @@ class Master:
     # --- the run -------------------------------------------------------------------------------
     def run(self, progress=None) -> RunResult:
         """Open, step to the end, close: the whole scenario. `progress(done, total)`, if given,
-        hears of the steps done every PROGRESS_EVERY steps. Ctrl-C or SIGTERM interrupt the run
+        hears of the steps done every PROGRESS_EVERY steps and at the end. Ctrl-C or SIGTERM interrupt the run
         between two communication steps (interrupt.Interrupted), never inside an FMU."""
         started = clock.perf_counter()
         every = self.PROGRESS_EVERY
         with interrupt.deferred(), self:
             while not self.finished():
                 self.steps(every - self.k % every)        # up to the next report
-                if progress is not None and self.k % every == 0:
+                if progress is not None and (self.k % every == 0 or self.finished()):
                     progress(*self.progress_point())
             result = self.result()
         result.wall_time = clock.perf_counter() - started
         return result
 
     def finished(self) -> bool:
-        if self.algorithm is None:
-            self._require_open("finished")
+        self._require_opened("finished")
         if self.algorithm.variable_step:
             return self.t >= self.stop * (1 - 1e-12)
         return self.k >= self.n_steps
@@ -113,6 +115,7 @@ class Master:
     def progress_point(self) -> tuple[int, int]:
         """(done, total) for a progress report: communication steps, or thousandths of the run
         where the algorithm sizes its steps."""
+        self._require_opened("progress_point")
         if self.algorithm.variable_step:
             return int(1000 * self.t / self.stop), 1000
         return self.k, self.n_steps
@@ -192,7 +195,7 @@ class Master:
                                  outputs=system.outputs)
         self.recorder.record(0.0)
         self._phase = "step"
-        self._open = True
+        self._run = object()
 
     def step(self) -> None:
         """One communication step: n_steps even steps of h end exactly at the stop time; a
@@ -260,9 +263,16 @@ class Master:
     def _require_open(self, call: str) -> None:
         """Refuse a call that would reach the FMUs before the run is opened or after it is
         closed (its instances freed: a call on them is undefined, a crash with pythonfmu's)."""
-        if not self._open:
+        if self._run is None:
             raise CosimError(f"Master.{call}(): the run is not open: call it within "
                              f"`with Master(scenario, fmus) as master:`")
+
+    def _require_opened(self, call: str) -> None:
+        """Refuse a question about the run before it has been opened (after it closed, what it
+        recorded and how far it came stand)."""
+        if self.recorder is None:
+            raise CosimError(f"Master.{call}(): the run has not been opened: call it within or "
+                             f"after `with Master(scenario, fmus) as master:`")
 
     def save_state(self) -> Snapshot:
         """The state of every FMU and of the run: `restore_state` comes back to it."""
@@ -271,23 +281,29 @@ class Master:
         self._snapshots.append(states)
         with self._reporting(self.t):
             states.save()
-        return Snapshot(self.k, self.t, self.recorder.length, states)
+        return Snapshot(self.k, self.t, self.recorder.length, states, self._run)
 
     def restore_state(self, snapshot: Snapshot) -> None:
         self._require_open("restore_state")
+        # another run's FMU states are not this run's FMUs' (another Master's, or this one's
+        # before it was closed and opened again: freed at its close)
+        if getattr(snapshot, "run", None) is not self._run:
+            raise CosimError("Master.restore_state(): that snapshot was not saved in this open "
+                             "run (a run comes back only to its own save_state())")
         self.k, self.t = snapshot.k, snapshot.t
         self.recorder.truncate(snapshot.rows)
         with self._reporting(self.t):
             snapshot.states.restore()
 
     def result(self) -> RunResult:
+        self._require_opened("result")
         time, columns = self.recorder.arrays()
         coupling, warnings = self.algorithm.report(self.k)
         return RunResult(self.scenario, time, columns, 0.0, self.log.lines + warnings,
                          coupling, dict(self.system.units))
 
     def close(self) -> None:
-        self._open = False
+        self._run = None
         if self.algorithm is not None:
             self.algorithm.close()
         while self._snapshots:

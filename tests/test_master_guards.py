@@ -1,0 +1,123 @@
+"""Master's calls outside the run they belong to, refused in one line instead of reaching FMU
+instances that are not there or no longer are (a step or a restore after the run closed ended
+the process with SIGSEGV in pythonfmu's binary), and the progress a run reports, to its end."""
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from sewfmu.scenarios.cosim.fmi_calls import CosimError
+from sewfmu.scenarios.format.values import ScenarioError
+from tests.test_records_at_once import _system
+
+
+@pytest.mark.parametrize("count", [2.5, "3", None, -1])
+def test_a_number_of_steps_that_is_not_one_is_refused_in_one_line(count):
+    master, _ = _system(None)
+    with master:
+        with pytest.raises(ScenarioError, match=r"Master\.steps\(.*\): the number of steps"):
+            master.steps(count)
+        master.steps(np.int64(3))          # numpy's whole numbers are whole numbers
+        assert master.k == 3
+
+
+def test_stepping_outside_the_open_run_is_refused_not_made():
+    master, _ = _system(None)
+    with pytest.raises(CosimError, match=r"Master\.step.*the run is not open"):
+        master.step()
+    with master:
+        master.steps(3)
+    for call in (master.step, master.save_state, lambda: master.steps(2)):
+        with pytest.raises(CosimError, match=r"the run is not open"):
+            call()
+    assert master.k == 3 and len(master.result().time) == 4
+
+
+def test_a_step_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
+    # a call on a freed pythonfmu instance ended the process with SIGSEGV
+    script = textwrap.dedent("""
+        import sys
+        import sewfmu
+        from sewfmu.scenarios.cosim.master import Master
+        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+        sc = sewfmu.load("punch_drive")
+        with Master(sc, fmus_for(sc)) as master:
+            master.steps(10)
+        try:
+            master.step()
+        except sewfmu.Error as err:
+            print(err)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "the run is not open" in proc.stdout
+
+
+def test_questions_before_the_run_is_opened_are_refused_and_answered_after_it_closed():
+    master, _ = _system(None)
+    for call in (master.result, master.progress_point, master.finished):
+        with pytest.raises(CosimError, match=r"the run has not been opened"):
+            call()
+    with master:
+        master.steps(4)
+    assert master.progress_point() == (4, 70) and not master.finished()
+    assert len(master.result().time) == 5
+
+
+def test_a_snapshot_comes_back_only_in_its_own_open_run():
+    master, _ = _system(None)
+    with master:
+        saved = master.save_state()
+        master.steps(5)
+    with master:                             # opened again: the old snapshot's states are freed
+        master.steps(2)
+        with pytest.raises(CosimError, match=r"snapshot was not saved in this open run"):
+            master.restore_state(saved)
+        assert master.k == 2
+    a, _ = _system(None)
+    b, _ = _system(None)
+    with a, b:
+        a.steps(10)
+        from_a = a.save_state()
+        b.steps(3)
+        with pytest.raises(CosimError, match=r"snapshot was not saved in this open run"):
+            b.restore_state(from_a)
+        assert (b.k, a.k) == (3, 10)
+        b.steps(2)
+        a.restore_state(from_a)               # its own: comes back
+        assert b.k == 5
+
+
+def test_a_restore_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
+    script = textwrap.dedent("""
+        import sewfmu
+        from sewfmu.scenarios.cosim.master import Master
+        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+        sc = sewfmu.load("punch_drive")
+        master = Master(sc, fmus_for(sc))
+        with master:
+            saved = master.save_state()
+            master.steps(3)
+        with master:
+            master.steps(1)
+            try:
+                master.restore_state(saved)
+            except sewfmu.Error as err:
+                print(err)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "not saved in this open run" in proc.stdout
+
+
+@pytest.mark.parametrize("master", ["jacobi", "adaptive"])
+def test_the_progress_reported_reaches_the_end(master):
+    heard = []
+    run, _ = _system(None, master=master)
+    run.run(lambda done, total: heard.append((done, total)))
+    assert heard and heard[-1][0] == heard[-1][1]
+    assert all(0 <= done <= total for done, total in heard)
