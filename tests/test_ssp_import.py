@@ -53,6 +53,34 @@ def test_an_exported_catalogue_scenario_read_back_gives_the_same_figures(tmp_pat
     assert _figures(back) == _figures(scenario)
 
 
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_an_export_keeps_the_record_its_thinning_and_the_fmi_version(tmp_path, fmi):
+    # what a TOML scenario's run records is what the SSP's run records (the SSP standard has no
+    # place for it: sewfmu's annotation carries it); an independent check is the run itself
+    sc = load("punch_drive")
+    sc.set_value("experiment.revolutions", 2)
+    sc.set_value("experiment.record_every", 4)
+    sc.set_value("experiment.fmi", fmi)
+    sc.record = ["punch.contact", "punch.F2", "shaft.phi", "punch.y"]
+    back = load(str(export(sc, tmp_path / "narrow.ssp")))
+    assert (back.record, back.record_every, back.fmi) == (sc.record, 4, fmi)
+    ours, theirs = simulate(sc), simulate(back)
+    assert list(theirs.columns) == sc.record
+    assert len(theirs.time) == len(ours.time) < 2 * 2514 / 4
+    for column in sc.record:
+        assert (theirs[column] == ours[column]).all(), column
+
+
+def test_an_ssp_from_elsewhere_records_every_output(tmp_path):
+    sc = load("punch_drive")
+    sc.set_value("experiment.revolutions", 1)
+    ssp = export(sc, tmp_path / "plain.ssp")
+    edited = _rewrite(ssp, tmp_path / "edited.ssp",
+                      lambda text: re.sub(r'\s*record_every="\d+"', "", text))
+    back = load(str(edited))
+    assert back.record is None and back.record_every == 1
+
+
 def _rewrite(ssp: Path, out: Path, edit, extra: dict[str, str] | None = None) -> Path:
     """A copy of an .ssp with its SystemStructure.ssd edited and extra files added."""
     with zipfile.ZipFile(ssp) as src, zipfile.ZipFile(out, "w") as dst:

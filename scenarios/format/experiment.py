@@ -38,7 +38,7 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
     ExperimentKey("acceleration", "iterative master's acceleration of the passes: aitken, "
                   "iqn-ils, none", '"aitken"', '"iqn-ils"', in_ssp=True),
     ExperimentKey("record_every", "keep every n-th communication point (long runs); the last "
-                  "revolution is always kept whole", "1", "10"),
+                  "revolution is always kept whole", "1", "10", in_ssp=True),
     ExperimentKey("fmi", "FMI version of sewfmu's FMUs the run uses: 2 or 3", "2", "3"),
     ExperimentKey("accuracy", "the coupling error a run's key figures may carry, relative to "
                   "each figure; estimated by the same run at twice the step (the adaptive "
@@ -56,8 +56,10 @@ def experiment_of(scenario) -> dict:
 
 
 def ssp_settings(scenario, step: float) -> dict:
-    """What sewfmu's SSP annotation carries: the step, the master, and the settings the master
-    uses (a tolerance or an acceleration it ignores is left out)."""
-    used = {"step": step, "master": scenario.master, **scenario.master_settings()}
+    """What sewfmu's SSP annotation carries: the step, the master, the settings the master
+    uses (a tolerance or an acceleration it ignores is left out) and how the records are
+    thinned."""
+    used = {"step": step, "master": scenario.master, **scenario.master_settings(),
+            "record_every": scenario.record_every}
     return {name: used[name] for name, key in EXPERIMENT_KEYS.items()
             if key.in_ssp and name in used}

@@ -35,7 +35,10 @@ from sewfmu.scenarios.format.values import ScenarioError, check_instance_name
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+# sewfmu's annotation of the DefaultExperiment (its step, master, settings, record), as
+# scenarios/interop/ssp_export.py writes it
 ANNOTATION = "org.sewfmu.experiment"
+SEWFMU = "https://github.com/sewfmu/ssp-annotation"
 SSD_NAME = "SystemStructure.ssd"
 
 
@@ -65,7 +68,7 @@ def load_ssp(path: Path) -> Scenario:
         raise ScenarioError(f"{path}: not an SSP 1.0 system structure (expected "
                             f"ssd:SystemStructureDescription with an ssd:System)")
     where = f"{path}"
-    instances, files = {}, {}
+    instances, files, versions = {}, {}, {}
     for comp in system.iterfind(f"{_q(SSD, 'Elements')}/{_q(SSD, 'Component')}"):
         name, source = comp.get("name"), comp.get("source")
         if not name or not source:
@@ -80,7 +83,7 @@ def load_ssp(path: Path) -> Scenario:
         if fmu is None:
             raise ScenarioError(f"{where}: component {name}: its FMU {source} is not in the "
                                 f"{'archive' if path.suffix.lower() == '.ssp' else 'folder'}")
-        kind = _fmu_type(fmu, files, where, name)
+        kind = _fmu_type(fmu, files, versions, where, name)
         instances[name] = Instance(name, kind, _parameters(comp, base, f"{where}: component "
                                                                        f"{name}"))
     if not instances:
@@ -95,7 +98,11 @@ def load_ssp(path: Path) -> Scenario:
         step=experiment["step"], master=experiment["master"],
         stop_time=_stop_time(root, where), revolutions=None, shaft=None, compare=None,
         roles=roles, tolerance=experiment["tolerance"], acceleration=experiment["acceleration"],
-        tolerance_master=experiment["master"])
+        tolerance_master=experiment["master"], record_every=experiment["record_every"])
+    scenario.record = experiment["record"]
+    # the FMI version of the FMUs it runs, where they agree (the provenance's experiment.fmi)
+    if len(set(versions.values())) == 1:
+        scenario.fmi = 3 if next(iter(versions.values())).startswith("3") else 2
     scenario.fmu_files = files
     scenario.digest = digest
     check_one_source(connections, where)
@@ -172,12 +179,15 @@ def _xml(file: Path, where: Path) -> ET.Element:
         raise ScenarioError(f"{where}: {file.name} is not well-formed XML: {err}") from None
 
 
-def _fmu_type(fmu: Path, files: dict[str, Path], where: str, component: str) -> str:
-    """The FMU's modelName (made unique if two different files share one)."""
+def _fmu_type(fmu: Path, files: dict[str, Path], versions: dict[str, str], where: str,
+              component: str) -> str:
+    """The FMU's modelName (made unique if two different files share one); its fmiVersion put
+    into `versions`."""
     from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
     try:
-        name = read_model_description(str(fmu)).modelName
+        md = read_model_description(str(fmu))
+        name = md.modelName
     except Exception as err:            # noqa: BLE001 - any unreadable FMU is one message
         raise ScenarioError(f"{where}: component {component}: {fmu.name} is not a readable FMU "
                             f"({' '.join(str(err).split())})") from None
@@ -186,6 +196,7 @@ def _fmu_type(fmu: Path, files: dict[str, Path], where: str, component: str) -> 
         k += 1
         kind = f"{name}#{k}"
     files[kind] = fmu
+    versions[kind] = str(md.fmiVersion)
     return kind
 
 
@@ -264,10 +275,12 @@ def _experiment(root: ET.Element) -> dict:
     """The experiment keys sewfmu's annotation carries (scenarios/format/experiment.py: step, master,
     tolerance, acceleration); where the file gives no step, 0 (the run then asks for --set
     experiment.step). A value that is not valid is left at its default."""
-    found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken"}
+    found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken",
+             "record_every": 1, "record": None}
     valid = {"step": float, "tolerance": float,
              "master": lambda text: MASTER_NAMES[MASTER_NAMES.index(text)],
-             "acceleration": lambda text: ACCELERATIONS[ACCELERATIONS.index(text)]}
+             "acceleration": lambda text: ACCELERATIONS[ACCELERATIONS.index(text)],
+             "record_every": _whole_number}
     carried = [name for name, key in EXPERIMENT_KEYS.items() if key.in_ssp]
     for note in root.iter(_q(SSC, "Annotation")):
         if note.get("type") == ANNOTATION:
@@ -277,7 +290,17 @@ def _experiment(root: ET.Element) -> dict:
                         found[name] = valid[name](element.get(name))
                     except (TypeError, ValueError):
                         pass
+            columns = [element.get("column") for element in note.iter(_q(SEWFMU, "Record"))]
+            if columns and all(columns):
+                found["record"] = columns
     return found
+
+
+def _whole_number(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise ValueError(text)
+    return value
 
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:

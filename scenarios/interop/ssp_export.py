@@ -22,6 +22,7 @@ from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.ssp_import import ANNOTATION, SEWFMU
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -29,8 +30,6 @@ SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 # every component's inline parameter set carries this name, so that a host that applies one
 # named set to the whole system (ecos: init(parameter_set=...)) applies all of them
 PARAMETER_SET = "sewfmu"
-SEWFMU = "https://github.com/sewfmu/ssp-annotation"
-ANNOTATION = "org.sewfmu.experiment"
 # OMSimulator's annotations (its command-line tool refuses a system without its step)
 OMS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 ET.register_namespace("sewfmu", SEWFMU)
@@ -106,8 +105,12 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     notes = ET.SubElement(experiment, _q(SSD, "Annotations"))
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
     settings = ssp_settings(scenario, step)
-    ET.SubElement(note, _q(SEWFMU, "Experiment"),
-                  {k: repr(v) if isinstance(v, float) else v for k, v in settings.items()})
+    carried = ET.SubElement(note, _q(SEWFMU, "Experiment"),
+                            {k: repr(v) if isinstance(v, float) else str(v)
+                             for k, v in settings.items()})
+    # a narrowed record, one column each (a variable's name may hold any character)
+    for column in scenario.record or ():
+        ET.SubElement(carried, _q(SEWFMU, "Record"), {"column": column})
     ET.indent(root)
     return ET.ElementTree(root)
 
