@@ -93,8 +93,9 @@ class Master:
     # --- the run -------------------------------------------------------------------------------
     def run(self, progress=None) -> RunResult:
         """Open, step to the end, close: the whole scenario. `progress(done, total)`, if given,
-        hears of the steps done every PROGRESS_EVERY steps and at the end. Ctrl-C or SIGTERM interrupt the run
-        between two communication steps (interrupt.Interrupted), never inside an FMU."""
+        hears of the steps done every PROGRESS_EVERY steps and at the end. Ctrl-C or SIGTERM
+        interrupt the run between two communication steps (interrupt.Interrupted), never inside
+        an FMU."""
         started = clock.perf_counter()
         every = self.PROGRESS_EVERY
         with interrupt.deferred(), self:

@@ -273,8 +273,9 @@ def _stop_time(root: ET.Element, where: str) -> float:
 
 def _experiment(root: ET.Element) -> dict:
     """The experiment keys sewfmu's annotation carries (scenarios/format/experiment.py: step, master,
-    tolerance, acceleration); where the file gives no step, 0 (the run then asks for --set
-    experiment.step). A value that is not valid is left at its default."""
+    tolerance, acceleration, record_every) and its narrowed record; where the file gives no step,
+    0 (the run then asks for --set experiment.step). A value that is not valid is left at its
+    default (a recorded column is checked by the run, as a TOML scenario's)."""
     found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken",
              "record_every": 1, "record": None}
     valid = {"step": float, "tolerance": float,
