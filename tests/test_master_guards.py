@@ -8,8 +8,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from sewfmu.scenarios.cosim.fmi_calls import CosimError
+from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
+from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.format.values import ScenarioError
+from tests.fake_fmu import Failing, Integrator, fake_scenario, maker
 from tests.test_records_at_once import _system
 
 
@@ -25,7 +27,7 @@ def test_a_number_of_steps_that_is_not_one_is_refused_in_one_line(count):
 
 def test_stepping_outside_the_open_run_is_refused_not_made():
     master, _ = _system(None)
-    with pytest.raises(CosimError, match=r"Master\.step.*the run is not open"):
+    with pytest.raises(CosimError, match=r"Master\.step\(\): the run is not open"):
         master.step()
     with master:
         master.steps(3)
@@ -121,3 +123,65 @@ def test_the_progress_reported_reaches_the_end(master):
     run.run(lambda done, total: heard.append((done, total)))
     assert heard and heard[-1][0] == heard[-1][1]
     assert all(0 <= done <= total for done, total in heard)
+
+
+def test_a_run_open_already_is_not_opened_again():
+    master, made = _system(None)
+    with master:
+        master.steps(10)
+        for second in (master.__enter__, master.open, master.run):
+            with pytest.raises(CosimError, match=r"the run is open already"):
+                second()
+        assert master.k == 10                  # the run goes on where it was
+        master.steps(5)
+        assert master.k == 15
+    assert all(inst.calls[-1] == "free" for inst in made.values())
+    assert [inst.calls.count("instantiate") for inst in made.values()] == [1, 1, 1]
+
+
+def test_after_a_failed_step_the_run_goes_on_only_from_a_state_saved_before():
+    models = {"a": Integrator(gain=1.0, x0=1.0), "b": Failing(at=0.5, status=Status.DISCARD)}
+    sc = fake_scenario(models, ["a.x -> b.u", "a.x_dot -> b.u_dot", "b.x -> a.u",
+                                "b.x_dot -> a.u_dot"], 1.0, 0.1)
+    master = Master(sc, {}, make_instance=maker(models))
+    with master:
+        master.steps(3)
+        saved = master.save_state()
+        with pytest.raises(CosimError, match=r"b failed during step from t = 0.5"):
+            master.steps(10)
+        with pytest.raises(CosimError, match=r"a step from t = 0.5 s failed; the run goes on "
+                                             r"only from a state saved before it"):
+            master.steps(1)
+        master.restore_state(saved)
+        master.steps(2)                        # up to t = 0.5 again: no failure before it
+        assert master.k == 5
+
+
+def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_paths):
+    # the stepping thread called an FMU instance the closing thread had freed: SIGSEGV
+    script = textwrap.dedent("""
+        import threading, time
+        import sewfmu
+        from sewfmu.scenarios.cosim.master import Master
+        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+        sc = sewfmu.load("punch_drive")
+        sc.set_value("experiment.revolutions", 2000)     # minutes of stepping: closed within
+        master = Master(sc, fmus_for(sc))
+        master.__enter__()
+        told = []
+        def stepping():
+            try:
+                master.steps(10**9)
+            except sewfmu.Error as err:
+                told.append(str(err))
+        thread = threading.Thread(target=stepping)
+        thread.start()
+        time.sleep(0.05)
+        master.close()
+        thread.join()
+        print(told, master.k < master.n_steps)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "the run is not open" in proc.stdout and "True" in proc.stdout

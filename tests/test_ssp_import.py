@@ -12,6 +12,7 @@ import pytest
 
 from sewfmu.cli import main
 from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.interop.ssp_export import export
 from sewfmu.scenarios.runs.runner import simulate, summarize
 
@@ -79,6 +80,63 @@ def test_an_ssp_from_elsewhere_records_every_output(tmp_path):
                       lambda text: re.sub(r'\s*record_every="\d+"', "", text))
     back = load(str(edited))
     assert back.record is None and back.record_every == 1
+
+
+@pytest.fixture(scope="module")
+def narrow_ssp(tmp_path_factory, fmu_dir):
+    """punch_drive (1 revolution) with a narrowed record, record_every 7, exported."""
+    sc = load("punch_drive")
+    sc.set_value("experiment.revolutions", 1)
+    sc.set_value("experiment.record_every", 7)
+    sc.record = ["punch.F2", "shaft.phi"]
+    folder = tmp_path_factory.mktemp("narrow")
+    return export(sc, folder / "narrow.ssp", fmu_dir)
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ('record_every="7"', 'record_every="0"', r"record_every: must be a whole number >= 1, got 0"),
+    ('record_every="7"', 'record_every="2.5"', r"record_every: .* got 2.5"),
+    ('master="jacobi"', 'master="adaptiv"', r"experiment.master: must be one of .* 'adaptiv'"),
+    ('step="', 'step="nan" x="', r"experiment.step"),
+    ('<sewfmu:Record column="shaft.phi" />', '<sewfmu:Record column="punch.F2" />',
+     r"record lists 'punch.F2' more than once"),
+    ('<sewfmu:Record column="shaft.phi" />', '<sewfmu:Record column="" />',
+     r"a Record without its column"),
+    ('</ssd:Annotations>\n  </ssd:DefaultExperiment>',
+     '<ssc:Annotation type="org.sewfmu.experiment"><sewfmu:Experiment step="0.001" />'
+     '</ssc:Annotation></ssd:Annotations></ssd:DefaultExperiment>',
+     r"appears more than once"),
+], ids=["record_every 0", "record_every 2.5", "unknown master", "step nan", "duplicate column",
+        "empty column", "two annotations"])
+def test_a_bad_value_in_sewfmus_annotation_is_refused_as_in_a_scenario_file(
+        tmp_path, narrow_ssp, old, new, words):
+    edited = _rewrite(narrow_ssp, tmp_path / "edited.ssp",
+                      lambda text: text.replace(old, new, 1))
+    with pytest.raises(ScenarioError, match=words) as err:
+        load(str(edited))
+    assert "\n" not in str(err.value)
+
+
+def test_another_tools_annotation_is_not_read_as_sewfmus(tmp_path, narrow_ssp):
+    # nested in sewfmu's, or beside it elsewhere in the file, with keys sewfmu knows
+    foreign = ('<ssc:Annotation type="org.other"><x:foo xmlns:x="urn:x" step="0.003" '
+               'master="adaptive" record_every="2"><sewfmu:Record column="punch.y" />'
+               '</x:foo></ssc:Annotation>')
+    edited = _rewrite(narrow_ssp, tmp_path / "edited.ssp",
+                      lambda text: text.replace('<sewfmu:Record column="shaft.phi" />',
+                                                '<sewfmu:Record column="shaft.phi" />' + foreign, 1)
+                      .replace("</ssd:Elements>", "</ssd:Elements><ssd:Annotations>"
+                               + foreign + "</ssd:Annotations>", 1))
+    back = load(str(edited))
+    original = load(str(narrow_ssp))
+    assert (back.step, back.master, back.record_every, back.record) == \
+        (original.step, "jacobi", 7, ["punch.F2", "shaft.phi"])
+
+
+def test_the_fmi_version_of_sewfmus_fmus_does_not_apply_to_an_ssps_own(narrow_ssp):
+    with pytest.raises(ScenarioError, match=r"experiment.fmi: chooses the FMI version of "
+                                            r"sewfmu's own FMUs"):
+        load(str(narrow_ssp)).set_value("experiment.fmi", 3)
 
 
 def _rewrite(ssp: Path, out: Path, edit, extra: dict[str, str] | None = None) -> Path:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import operator
+import threading
 import time as clock
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -84,6 +85,10 @@ class Master:
         self._snapshots: list[Snapshot] = []
         # the run now open (between a whole open() and close(): FMU calls may be made), or None
         self._run: object | None = None
+        # held while FMUs are called on behalf of a caller, so that close() from another thread
+        # waits for the call under way before it frees the instances
+        self._calling = threading.RLock()
+        self._failed_at: float | None = None     # the time of a failed step not yet undone
         self.recorder: Recorder | None = None      # made by open(); read by result() after close
 
     @property
@@ -122,6 +127,7 @@ class Master:
         return self.k, self.n_steps
 
     def __enter__(self) -> "Master":
+        self._refuse_second_opening()
         try:
             self.open()
         except BaseException:
@@ -135,6 +141,8 @@ class Master:
     def open(self) -> None:
         """Check the experiment, load and connect the FMUs, initialize them in dependency order,
         record the initial point."""
+        self._refuse_second_opening()
+        self._failed_at = None
         sc = self.scenario
         self.stop = sc.end_time()
         if not sc.step > 0:          # an SSP system that gives none
@@ -201,39 +209,57 @@ class Master:
     def step(self) -> None:
         """One communication step: n_steps even steps of h end exactly at the stop time; a
         variable-step algorithm ends its last step there."""
-        self.steps(1)
+        self.steps(1, "step")
 
-    def steps(self, count: int) -> None:
+    def steps(self, count: int, _call: str = "steps") -> None:
         """Up to `count` communication steps (fewer where the run ends). A signal received
         within interrupt.deferred() stops them between two steps (interrupt.Interrupted)."""
-        self._require_open("steps")
+        self._require_open(_call)
         try:
             count = operator.index(count)
         except TypeError:
-            raise ScenarioError(f"Master.steps({count!r}): the number of steps is a whole "
+            raise ScenarioError(f"Master.{_call}({count!r}): the number of steps is a whole "
                                 f"number") from None
         if count < 0:
-            raise ScenarioError(f"Master.steps({count}): the number of steps cannot be "
+            raise ScenarioError(f"Master.{_call}({count}): the number of steps cannot be "
                                 f"negative")
-        if self.algorithm.variable_step:
-            for _ in range(count):
-                if self.finished():
-                    break
-                self._variable_step()
-                if interrupt.pending:
-                    interrupt.raise_pending()
-            return
+        with self._calling:
+            self._require_open(_call)          # closed by another thread while this one waited
+            if self._failed_at is not None:
+                raise CosimError(f"Master.{_call}(): a step from t = {self._failed_at:g} s "
+                                 f"failed; the run goes on only from a state saved before it "
+                                 f"(restore_state) or opened again")
+            if self.algorithm.variable_step:
+                self._variable_steps(count)
+            else:
+                self._fixed_steps(count)
+
+    def _variable_steps(self, count: int) -> None:
+        run = self._run
+        for _ in range(count):
+            if self.finished():
+                break
+            self._variable_step()
+            if interrupt.pending:
+                interrupt.raise_pending()
+            if self._run is not run:
+                self._require_open("steps")
+
+    def _fixed_steps(self, count: int) -> None:
         # the fixed-step loop, what it uses bound once: the hot path of every run
         advance, system, h, n, stop = (self.algorithm.advance, self.system, self.h,
                                        self.n_steps, self.stop)
         watch, record, every, dense_k = self.watch, self.recorder.record, self.every, self.dense_k
-        k = self.k
+        k, run = self.k, self._run
         end = min(n, k + count)
         while k < end:
             t = k * h
+            if self._run is not run:           # closed by another thread
+                self._require_open("steps")
             try:                   # (no context manager here: this is the hot path)
                 advance(system, t, h)
             except FmiCallError as err:
+                self._failed_at = t
                 raise self._failure(err, err.when or f"from t = {t:g} to {t + h:g} s") from None
             k += 1
             self.k = k
@@ -253,6 +279,7 @@ class Master:
         try:
             taken = self.algorithm.advance(self.system, t, limit)
         except FmiCallError as err:
+            self._failed_at = t
             raise self._failure(err, err.when or f"from t = {t:g} to {t + limit:g} s") from None
         self.k += 1
         self.t = t + taken if t + taken < self.stop * (1 - 1e-12) else self.stop
@@ -268,6 +295,13 @@ class Master:
             raise CosimError(f"Master.{call}(): the run is not open: call it within "
                              f"`with Master(scenario, fmus) as master:`")
 
+    def _refuse_second_opening(self) -> None:
+        """A run open already (a `with` inside its own `with`, run() within it) would be
+        restarted from zero and its instances never freed: refused."""
+        if self._run is not None:
+            raise CosimError("Master.open(): the run is open already: one Master runs one "
+                             "run at a time (make another Master for another)")
+
     def _require_opened(self, call: str) -> None:
         """Refuse a question about the run before it has been opened (after it closed, what it
         recorded and how far it came stand)."""
@@ -278,11 +312,13 @@ class Master:
     def save_state(self) -> Snapshot:
         """The state of every FMU and of the run: `restore_state` comes back to it."""
         self._require_open("save_state")
-        states = Rollback(self.instances)
-        self._snapshots.append(states)
-        with self._reporting(self.t):
-            states.save()
-        return Snapshot(self.k, self.t, self.recorder.length, states, self._run)
+        with self._calling:
+            self._require_open("save_state")
+            states = Rollback(self.instances)
+            self._snapshots.append(states)
+            with self._reporting(self.t):
+                states.save()
+            return Snapshot(self.k, self.t, self.recorder.length, states, self._run)
 
     def restore_state(self, snapshot: Snapshot) -> None:
         self._require_open("restore_state")
@@ -291,10 +327,13 @@ class Master:
         if getattr(snapshot, "run", None) is not self._run:
             raise CosimError("Master.restore_state(): that snapshot was not saved in this open "
                              "run (a run comes back only to its own save_state())")
-        self.k, self.t = snapshot.k, snapshot.t
-        self.recorder.truncate(snapshot.rows)
-        with self._reporting(self.t):
-            snapshot.states.restore()
+        with self._calling:
+            self._require_open("restore_state")
+            self.k, self.t = snapshot.k, snapshot.t
+            self.recorder.truncate(snapshot.rows)
+            with self._reporting(self.t):
+                snapshot.states.restore()
+            self._failed_at = None
 
     def result(self) -> RunResult:
         self._require_opened("result")
@@ -305,6 +344,10 @@ class Master:
 
     def close(self) -> None:
         self._run = None
+        with self._calling:                # a call under way in another thread ends first
+            self._free()
+
+    def _free(self) -> None:
         if self.algorithm is not None:
             self.algorithm.close()
         while self._snapshots:

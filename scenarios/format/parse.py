@@ -110,9 +110,10 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
                      if "revolutions" in exp else None),
         shaft=exp.get("shaft"), compare=data.get("compare"), sweep=data.get("sweep"))
     scenario.fmu_files = files          # set_value reads their declared units
-    for key in ("record_every", "tolerance", "acceleration", "fmi"):
-        if key in exp:
-            scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}: experiment.{key}")
+    # every other experiment key the file gives, as `--set experiment.KEY` takes it
+    for key in EXPERIMENT_KEYS:
+        if key in exp and key not in ("step", "master", "stop_time", "revolutions", "shaft"):
+            scenario.set_value(f"experiment.{key}", exp[key], origin=f"{source}:")
     if "tolerance" in exp:
         scenario.tolerance_master = master
     for inst_name, spec in data["instances"].items():
@@ -140,7 +141,7 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
         raise ScenarioError(f"{source}: connections must be a list of \"a.x -> b.y\" strings")
     scenario.connections = [_parse_connection(text, instances, source) for text in connections]
     check_one_source(scenario.connections, source)
-    _check_record(scenario.record, source)
+    check_record(scenario.record, source)
     if scenario.compare is not None:
         _check_compare(scenario, source)
     if scenario.sweep is not None:
@@ -160,7 +161,8 @@ def check_one_source(connections: list[Connection], source: str) -> None:
         sources[(con.dst, con.dst_var)] = con
 
 
-def _check_record(record: Any, source: str) -> None:
+def check_record(record: Any, source: str) -> None:
+    """A record list: "instance.variable" strings, each once (the run checks that they exist)."""
     if record is None:
         return
     if not isinstance(record, list) or not all(isinstance(r, str) for r in record):

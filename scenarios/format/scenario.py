@@ -219,6 +219,10 @@ class Scenario:
             if isinstance(value, bool) or value not in FMI_VERSIONS:
                 raise ScenarioError(f"{origin} experiment.fmi: the FMI version of the FMUs, 2 or "
                                     f"3, got {value!r}")
+            if self.instances and all(i.fmu in self.fmu_files for i in self.instances.values()):
+                raise ScenarioError(f"{origin} experiment.fmi: chooses the FMI version of "
+                                    f"sewfmu's own FMUs; {self.source} runs only FMU files of "
+                                    f"its own, whatever their version")
             self.fmi = int(value)
             return
         if key == "accuracy":

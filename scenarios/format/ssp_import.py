@@ -27,10 +27,9 @@ from xml.etree import ElementTree as ET
 
 from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
-from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES
-from sewfmu.scenarios.format.parse import check_one_source
+from sewfmu.scenarios.format.parse import check_one_source, check_record
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
-from sewfmu.scenarios.format.values import ScenarioError, check_instance_name
+from sewfmu.scenarios.format.values import ScenarioError, check_instance_name, parse_value
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -91,15 +90,24 @@ def load_ssp(path: Path) -> Scenario:
     connections = [_connection(c, instances, where)
                    for c in system.iterfind(f"{_q(SSD, 'Connections')}/{_q(SSD, 'Connection')}")]
     analysis, roles = _analysis_of({n: i.fmu for n, i in instances.items()})
-    experiment = _experiment(root)
+    settings, record = _annotation(root, where)
     scenario = Scenario(
         name=path.stem, source=str(path), description=system.get("description", ""),
         analysis=analysis, instances=instances, connections=connections, record=None,
-        step=experiment["step"], master=experiment["master"],
-        stop_time=_stop_time(root, where), revolutions=None, shaft=None, compare=None,
-        roles=roles, tolerance=experiment["tolerance"], acceleration=experiment["acceleration"],
-        tolerance_master=experiment["master"], record_every=experiment["record_every"])
-    scenario.record = experiment["record"]
+        step=0.0, master="jacobi", stop_time=_stop_time(root, where), revolutions=None,
+        shaft=None, compare=None, roles=roles)
+    # sewfmu's annotation, checked as `--set experiment.KEY=TEXT` is (the master first: a
+    # tolerance is for it); where the file gives no step, 0: the run then asks for one
+    origin = f"{where}: sewfmu's annotation:"
+    for key in ("master", "step", "tolerance", "acceleration", "record_every"):
+        if key in settings:
+            scenario.set_value(f"experiment.{key}", parse_value(settings[key], origin),
+                               origin=origin)
+    if "tolerance" in settings:
+        scenario.tolerance_master = scenario.master
+    if record is not None:
+        check_record(record, origin)
+        scenario.record = record
     # the FMI version of the FMUs it runs, where they agree (the provenance's experiment.fmi)
     if len(set(versions.values())) == 1:
         scenario.fmi = 3 if next(iter(versions.values())).startswith("3") else 2
@@ -271,37 +279,28 @@ def _stop_time(root: ET.Element, where: str) -> float:
     return stop
 
 
-def _experiment(root: ET.Element) -> dict:
-    """The experiment keys sewfmu's annotation carries (scenarios/format/experiment.py: step, master,
-    tolerance, acceleration, record_every) and its narrowed record; where the file gives no step,
-    0 (the run then asks for --set experiment.step). A value that is not valid is left at its
-    default (a recorded column is checked by the run, as a TOML scenario's)."""
-    found = {"step": 0.0, "master": "jacobi", "tolerance": None, "acceleration": "aitken",
-             "record_every": 1, "record": None}
-    valid = {"step": float, "tolerance": float,
-             "master": lambda text: MASTER_NAMES[MASTER_NAMES.index(text)],
-             "acceleration": lambda text: ACCELERATIONS[ACCELERATIONS.index(text)],
-             "record_every": _whole_number}
-    carried = [name for name, key in EXPERIMENT_KEYS.items() if key.in_ssp]
-    for note in root.iter(_q(SSC, "Annotation")):
-        if note.get("type") == ANNOTATION:
-            for element in note.iter():
-                for name in carried:
-                    try:
-                        found[name] = valid[name](element.get(name))
-                    except (TypeError, ValueError):
-                        pass
-            columns = [element.get("column") for element in note.iter(_q(SEWFMU, "Record"))]
-            if columns and all(columns):
-                found["record"] = columns
-    return found
-
-
-def _whole_number(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise ValueError(text)
-    return value
+def _annotation(root: ET.Element, where: str) -> tuple[dict[str, str], list[str] | None]:
+    """sewfmu's annotation of the DefaultExperiment, as ssp_export.py writes it: the experiment
+    keys it carries ({key: text}: scenarios/format/experiment.py's in_ssp keys) and a narrowed
+    record (None: every output). Another tool's annotations, anywhere, are not read."""
+    experiment = root.find(_q(SSD, "DefaultExperiment"))
+    notes = [] if experiment is None else [
+        note for note in experiment.iterfind(f"{_q(SSD, 'Annotations')}/{_q(SSC, 'Annotation')}")
+        if note.get("type") == ANNOTATION]
+    if not notes:
+        return {}, None
+    carried = [element for note in notes for element in note.iterfind(_q(SEWFMU, "Experiment"))]
+    if len(notes) > 1 or len(carried) > 1:
+        raise ScenarioError(f"{where}: sewfmu's annotation ({ANNOTATION}) appears more than "
+                            f"once in the DefaultExperiment")
+    if not carried:
+        return {}, None
+    settings = {name: carried[0].get(name) for name, key in EXPERIMENT_KEYS.items()
+                if key.in_ssp and carried[0].get(name) is not None}
+    columns = [element.get("column") for element in carried[0].iterfind(_q(SEWFMU, "Record"))]
+    if not all(columns):
+        raise ScenarioError(f"{where}: sewfmu's annotation: a Record without its column")
+    return settings, columns or None
 
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
