@@ -70,3 +70,25 @@ def test_the_estimate_switched_off_makes_no_coarser_run(tmp_path, capsys, monkey
     for bad in (0, -1, "on", True):
         with pytest.raises(sewfmu.ScenarioError, match="experiment.accuracy"):
             sewfmu.load("punch_drive", set={"experiment.accuracy": bad})
+
+
+def test_a_scenario_files_accuracy_and_accept_error_hold_as_with_set(tmp_path, capsys):
+    """[experiment] accuracy and accept_error in a file were ignored (the check was skipped
+    with exit 0): the file and --set give the same answer."""
+    assert main(["show", "punch_drive"]) == 0
+    toml = capsys.readouterr().out.replace("revolutions = 10", "revolutions = 2\naccuracy = 1e-4")
+    strict = tmp_path / "strict.toml"
+    strict.write_text(toml, encoding="utf-8")
+    assert main(["run", str(strict), "--out", str(tmp_path / "a")]) == 1
+    from_file = capsys.readouterr().err.strip().splitlines()
+    assert main(["run", "punch_drive", "--set", "experiment.revolutions=2", "--set",
+                 "experiment.accuracy=1e-4", "--out", str(tmp_path / "b")]) == 1
+    from_set = capsys.readouterr().err.strip().splitlines()
+    assert len(from_file) == 1 and "beyond experiment.accuracy = 0.0001" in from_file[0]
+    assert from_file[0].split(":", 3)[3] == from_set[0].split(":", 3)[3]   # but the name
+    accepted = tmp_path / "accepted.toml"
+    accepted.write_text(toml.replace("accuracy = 1e-4", "accuracy = 1e-4\naccept_error = true"),
+                        encoding="utf-8")
+    assert main(["run", str(accepted), "--out", str(tmp_path / "c")]) == 0
+    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    assert summary["provenance"]["experiment"]["accuracy"] == 1e-4
