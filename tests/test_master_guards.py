@@ -185,3 +185,75 @@ def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_pa
                           timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "the run is not open" in proc.stdout and "True" in proc.stdout
+
+
+def test_closing_or_opening_from_two_threads_at_any_moment_neither_crashes_nor_leaks(fmu_paths):
+    # close() while the other thread was still opening freed what the opening then stepped
+    # (SIGSEGV); two threads opening at once both "opened", the first run's instances leaked
+    script = textwrap.dedent("""
+        import threading, time
+        import sewfmu
+        from sewfmu.scenarios.cosim.master import Master
+        from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+        sc = sewfmu.load("punch_drive")
+        sc.set_value("experiment.revolutions", 20)
+        paths = fmus_for(sc)
+        outcomes = []
+        for delay in (0.0, 0.005, 0.02, 0.04, 0.07, 0.1):
+            master = Master(sc, paths)
+            def stepping():
+                try:
+                    with master:
+                        master.steps(10**9)
+                    outcomes.append("ran")
+                except sewfmu.Error as err:
+                    outcomes.append("refused" if "not open" in str(err) else str(err))
+            thread = threading.Thread(target=stepping)
+            thread.start()
+            time.sleep(delay)
+            master.close()
+            thread.join()
+        opened = []
+        master = Master(sc, paths)
+        def opening():
+            try:
+                master.open()
+                opened.append("opened")
+            except sewfmu.Error as err:
+                opened.append("open already" if "open already" in str(err) else str(err))
+        threads = [threading.Thread(target=opening) for _ in range(2)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        master.close()
+        print(sorted(set(outcomes)), sorted(opened))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    outcomes, opened = eval(proc.stdout.strip().replace("] [", "], ["))
+    assert set(outcomes) <= {"ran", "refused"}
+    assert opened == ["open already", "opened"]
+
+
+def test_no_state_is_saved_part_way_through_a_failed_step_nor_restored_after_a_fatal_one():
+    for status in (Status.DISCARD, Status.FATAL):
+        models = {"a": Integrator(gain=1.0, x0=1.0), "b": Failing(at=0.5, status=status)}
+        sc = fake_scenario(models, ["a.x -> b.u", "a.x_dot -> b.u_dot", "b.x -> a.u",
+                                    "b.x_dot -> a.u_dot"], 1.0, 0.1)
+        master = Master(sc, {}, make_instance=maker(models))
+        with master:
+            saved = master.save_state()
+            with pytest.raises(CosimError, match=r"failed during step from t = 0.5"):
+                master.steps(10)
+            with pytest.raises(CosimError, match=r"save_state\(\): a step from t = 0.5 s "
+                                                 r"failed"):
+                master.save_state()
+            if status == Status.FATAL:
+                with pytest.raises(CosimError, match=r"b failed fatally"):
+                    master.restore_state(saved)
+            else:
+                master.restore_state(saved)
+                master.steps(5)
+                assert master.k == 5

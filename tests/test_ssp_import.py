@@ -72,6 +72,15 @@ def test_an_export_keeps_the_record_its_thinning_and_the_fmi_version(tmp_path, f
         assert (theirs[column] == ours[column]).all(), column
 
 
+@pytest.mark.parametrize("accuracy, accept", [(1e-9, False), (1e-9, True), ("off", False)])
+def test_an_export_keeps_the_accuracy_its_figures_are_held_to(tmp_path, accuracy, accept):
+    sc = load("punch_drive")
+    sc.set_value("experiment.accuracy", accuracy)
+    sc.set_value("experiment.accept_error", accept)
+    back = load(str(export(sc, tmp_path / "held.ssp")))
+    assert (back.accuracy, back.accept_error) == (accuracy, accept)
+
+
 def test_an_ssp_from_elsewhere_records_every_output(tmp_path):
     sc = load("punch_drive")
     sc.set_value("experiment.revolutions", 1)
@@ -97,7 +106,9 @@ def narrow_ssp(tmp_path_factory, fmu_dir):
     ('record_every="7"', 'record_every="0"', r"record_every: must be a whole number >= 1, got 0"),
     ('record_every="7"', 'record_every="2.5"', r"record_every: .* got 2.5"),
     ('master="jacobi"', 'master="adaptiv"', r"experiment.master: must be one of .* 'adaptiv'"),
-    ('step="', 'step="nan" x="', r"experiment.step"),
+    ('step="[^"]*"', 'step="nan"', r"experiment.step"),
+    ('master="jacobi"', 'master="jacobi" tolerence="1e-7"',
+     r"unknown key 'tolerence'; did you mean 'tolerance'\?"),
     ('<sewfmu:Record column="shaft.phi" />', '<sewfmu:Record column="punch.F2" />',
      r"record lists 'punch.F2' more than once"),
     ('<sewfmu:Record column="shaft.phi" />', '<sewfmu:Record column="" />',
@@ -106,12 +117,12 @@ def narrow_ssp(tmp_path_factory, fmu_dir):
      '<ssc:Annotation type="org.sewfmu.experiment"><sewfmu:Experiment step="0.001" />'
      '</ssc:Annotation></ssd:Annotations></ssd:DefaultExperiment>',
      r"appears more than once"),
-], ids=["record_every 0", "record_every 2.5", "unknown master", "step nan", "duplicate column",
-        "empty column", "two annotations"])
+], ids=["record_every 0", "record_every 2.5", "unknown master", "step nan", "misspelt key",
+        "duplicate column", "empty column", "two annotations"])
 def test_a_bad_value_in_sewfmus_annotation_is_refused_as_in_a_scenario_file(
         tmp_path, narrow_ssp, old, new, words):
     edited = _rewrite(narrow_ssp, tmp_path / "edited.ssp",
-                      lambda text: text.replace(old, new, 1))
+                      lambda text: re.sub(old, new, text, count=1))
     with pytest.raises(ScenarioError, match=words) as err:
         load(str(edited))
     assert "\n" not in str(err.value)

@@ -88,6 +88,7 @@ class Master:
         # held while FMUs are called on behalf of a caller, so that close() from another thread
         # waits for the call under way before it frees the instances
         self._calling = threading.RLock()
+        self._closing = False        # close() asked from another thread: stop between two steps
         self._failed_at: float | None = None     # the time of a failed step not yet undone
         self.recorder: Recorder | None = None      # made by open(); read by result() after close
 
@@ -127,12 +128,13 @@ class Master:
         return self.k, self.n_steps
 
     def __enter__(self) -> "Master":
-        self._refuse_second_opening()
-        try:
-            self.open()
-        except BaseException:
-            self.close()            # instances initialized before the failure are freed
-            raise
+        with self._calling:         # another thread's opening or closing waits for this one
+            self._refuse_second_opening()
+            try:
+                self.open()
+            except BaseException:
+                self.close()        # instances initialized before the failure are freed
+                raise
         return self
 
     def __exit__(self, *exc) -> None:
@@ -141,8 +143,12 @@ class Master:
     def open(self) -> None:
         """Check the experiment, load and connect the FMUs, initialize them in dependency order,
         record the initial point."""
-        self._refuse_second_opening()
-        self._failed_at = None
+        with self._calling:
+            self._refuse_second_opening()
+            self._failed_at = None
+            self._open()
+
+    def _open(self) -> None:
         sc = self.scenario
         self.stop = sc.end_time()
         if not sc.step > 0:          # an SSP system that gives none
@@ -225,24 +231,20 @@ class Master:
                                 f"negative")
         with self._calling:
             self._require_open(_call)          # closed by another thread while this one waited
-            if self._failed_at is not None:
-                raise CosimError(f"Master.{_call}(): a step from t = {self._failed_at:g} s "
-                                 f"failed; the run goes on only from a state saved before it "
-                                 f"(restore_state) or opened again")
+            self._refuse_after_failure(_call)
             if self.algorithm.variable_step:
                 self._variable_steps(count)
             else:
                 self._fixed_steps(count)
 
     def _variable_steps(self, count: int) -> None:
-        run = self._run
         for _ in range(count):
             if self.finished():
                 break
             self._variable_step()
             if interrupt.pending:
                 interrupt.raise_pending()
-            if self._run is not run:
+            if self._closing:                  # close() asked from another thread
                 self._require_open("steps")
 
     def _fixed_steps(self, count: int) -> None:
@@ -250,11 +252,11 @@ class Master:
         advance, system, h, n, stop = (self.algorithm.advance, self.system, self.h,
                                        self.n_steps, self.stop)
         watch, record, every, dense_k = self.watch, self.recorder.record, self.every, self.dense_k
-        k, run = self.k, self._run
+        k = self.k
         end = min(n, k + count)
         while k < end:
             t = k * h
-            if self._run is not run:           # closed by another thread
+            if self._closing:                  # close() asked from another thread
                 self._require_open("steps")
             try:                   # (no context manager here: this is the hot path)
                 advance(system, t, h)
@@ -291,9 +293,17 @@ class Master:
     def _require_open(self, call: str) -> None:
         """Refuse a call that would reach the FMUs before the run is opened or after it is
         closed (its instances freed: a call on them is undefined, a crash with pythonfmu's)."""
-        if self._run is None:
+        if self._run is None or self._closing:
             raise CosimError(f"Master.{call}(): the run is not open: call it within "
                              f"`with Master(scenario, fmus) as master:`")
+
+    def _refuse_after_failure(self, call: str) -> None:
+        """After a failed step the FMUs are part-way through it: only a state saved before it
+        (or a new opening) gives a run to go on from."""
+        if self._failed_at is not None:
+            raise CosimError(f"Master.{call}(): a step from t = {self._failed_at:g} s failed; "
+                             f"the run goes on only from a state saved before it "
+                             f"(restore_state) or opened again")
 
     def _refuse_second_opening(self) -> None:
         """A run open already (a `with` inside its own `with`, run() within it) would be
@@ -314,6 +324,7 @@ class Master:
         self._require_open("save_state")
         with self._calling:
             self._require_open("save_state")
+            self._refuse_after_failure("save_state")
             states = Rollback(self.instances)
             self._snapshots.append(states)
             with self._reporting(self.t):
@@ -329,6 +340,11 @@ class Master:
                              "run (a run comes back only to its own save_state())")
         with self._calling:
             self._require_open("restore_state")
+            fatal = [inst.name for inst in self.instances if inst.failed]
+            if fatal:
+                raise CosimError(f"Master.restore_state(): {fatal[0]} failed fatally, after "
+                                 f"which FMI allows no call on it: the run can only be opened "
+                                 f"again")
             self.k, self.t = snapshot.k, snapshot.t
             self.recorder.truncate(snapshot.rows)
             with self._reporting(self.t):
@@ -343,8 +359,10 @@ class Master:
                          coupling, dict(self.system.units))
 
     def close(self) -> None:
-        self._run = None
+        self._closing = True               # a stepping thread stops between two steps
         with self._calling:                # a call under way in another thread ends first
+            self._run = None
+            self._closing = False
             self._free()
 
     def _free(self) -> None:

@@ -44,9 +44,9 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
                   "each figure; estimated by the same run at twice the step (the adaptive "
                   "master: 8 times its tolerance); beyond it the run says so and fails; "
                   "\"off\": no estimate and no coarser run (half the work of a fixed-step run "
-                  "less)", "0.05", '0.01, or "off"'),
+                  "less)", "0.05", '0.01, or "off"', in_ssp=True),
     ExperimentKey("accept_error", "true: a run beyond its accuracy succeeds all the same (its "
-                  "estimate is still reported)", "false", "true"),
+                  "estimate is still reported)", "false", "true", in_ssp=True),
 )}
 
 
@@ -57,9 +57,10 @@ def experiment_of(scenario) -> dict:
 
 def ssp_settings(scenario, step: float) -> dict:
     """What sewfmu's SSP annotation carries: the step, the master, the settings the master
-    uses (a tolerance or an acceleration it ignores is left out) and how the records are
-    thinned."""
+    uses (a tolerance or an acceleration it ignores is left out), how the records are thinned
+    and the accuracy the run's figures are held to."""
     used = {"step": step, "master": scenario.master, **scenario.master_settings(),
-            "record_every": scenario.record_every}
+            "record_every": scenario.record_every, "accuracy": scenario.accuracy,
+            "accept_error": scenario.accept_error}
     return {name: used[name] for name, key in EXPERIMENT_KEYS.items()
             if key.in_ssp and name in used}

@@ -25,6 +25,7 @@ import tempfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.parse import check_one_source, check_record
@@ -99,14 +100,15 @@ def load_ssp(path: Path) -> Scenario:
     # sewfmu's annotation, checked as `--set experiment.KEY=TEXT` is (the master first: a
     # tolerance is for it); where the file gives no step, 0: the run then asks for one
     origin = f"{where}: sewfmu's annotation:"
-    for key in ("master", "step", "tolerance", "acceleration", "record_every"):
+    for key in ("master", "step", "tolerance", "acceleration", "record_every", "accuracy",
+                "accept_error"):
         if key in settings:
             scenario.set_value(f"experiment.{key}", parse_value(settings[key], origin),
                                origin=origin)
     if "tolerance" in settings:
         scenario.tolerance_master = scenario.master
     if record is not None:
-        check_record(record, origin)
+        check_record(record, f"{where}: sewfmu's annotation")
         scenario.record = record
     # the FMI version of the FMUs it runs, where they agree (the provenance's experiment.fmi)
     if len(set(versions.values())) == 1:
@@ -295,8 +297,12 @@ def _annotation(root: ET.Element, where: str) -> tuple[dict[str, str], list[str]
                             f"once in the DefaultExperiment")
     if not carried:
         return {}, None
-    settings = {name: carried[0].get(name) for name, key in EXPERIMENT_KEYS.items()
-                if key.in_ssp and carried[0].get(name) is not None}
+    known = [name for name, key in EXPERIMENT_KEYS.items() if key.in_ssp]
+    for name in carried[0].attrib:
+        if name not in known:       # a setting the file states would otherwise not be used
+            raise ScenarioError(f"{where}: sewfmu's annotation: unknown key {name!r}"
+                                f"{did_you_mean(name, known)} (known: {', '.join(known)})")
+    settings = {name: carried[0].get(name) for name in known if carried[0].get(name) is not None}
     columns = [element.get("column") for element in carried[0].iterfind(_q(SEWFMU, "Record"))]
     if not all(columns):
         raise ScenarioError(f"{where}: sewfmu's annotation: a Record without its column")

@@ -106,13 +106,19 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     note = ET.SubElement(notes, _q(SSC, "Annotation"), {"type": ANNOTATION})
     settings = ssp_settings(scenario, step)
     carried = ET.SubElement(note, _q(SEWFMU, "Experiment"),
-                            {k: repr(v) if isinstance(v, float) else str(v)
-                             for k, v in settings.items()})
+                            {k: _text(v) for k, v in settings.items()})
     # a narrowed record, one column each (a variable's name may hold any character)
     for column in scenario.record or ():
         ET.SubElement(carried, _q(SEWFMU, "Record"), {"column": column})
     ET.indent(root)
     return ET.ElementTree(root)
+
+
+def _text(value) -> str:
+    """A setting as --set takes it back (scenarios/format/values.parse_value: TOML)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value) if isinstance(value, float) else str(value)
 
 
 def export_ssp(scenario: Scenario, path: Path, fmu_paths: dict[str, Path]) -> Path:
