@@ -97,14 +97,12 @@ def load_ssp(path: Path) -> Scenario:
         analysis=analysis, instances=instances, connections=connections, record=None,
         step=0.0, master="jacobi", stop_time=_stop_time(root, where), revolutions=None,
         shaft=None, compare=None, roles=roles)
-    # sewfmu's annotation, checked as `--set experiment.KEY=TEXT` is (the master first: a
-    # tolerance is for it); where the file gives no step, 0: the run then asks for one
+    # sewfmu's annotation, checked as `--set experiment.KEY=TEXT` is (in the keys' order: the
+    # master before a tolerance, which is for it); where the file gives no step, 0: the run
+    # then asks for one
     origin = f"{where}: sewfmu's annotation:"
-    for key in ("master", "step", "tolerance", "acceleration", "record_every", "accuracy",
-                "accept_error"):
-        if key in settings:
-            scenario.set_value(f"experiment.{key}", parse_value(settings[key], origin),
-                               origin=origin)
+    for key, text in settings.items():
+        scenario.set_value(f"experiment.{key}", parse_value(text, origin), origin=origin)
     if "tolerance" in settings:
         scenario.tolerance_master = scenario.master
     if record is not None:
