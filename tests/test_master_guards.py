@@ -1,6 +1,8 @@
 """Master's calls outside the run they belong to, refused in one line instead of reaching FMU
-instances that are not there or no longer are (a step or a restore after the run closed ended
-the process with SIGSEGV in pythonfmu's binary), and the progress a run reports, to its end."""
+instances that are not there or no longer are (a step or a restore after the run closed, or a
+close from another thread mid-step or mid-opening, ended the process with SIGSEGV in pythonfmu's
+binary): before and after the run, another run's snapshot, a second opening, a run part-way
+through a failed step; and the progress a run reports, to its end."""
 import subprocess
 import sys
 import textwrap
