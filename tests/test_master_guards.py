@@ -17,6 +17,15 @@ from tests.fake_fmu import Failing, Integrator, fake_scenario, maker
 from tests.test_records_at_once import _system
 
 
+def _in_a_process(script: str) -> str:
+    """What a script with real FMUs prints in a process of its own, which must end normally (a
+    call on a freed instance ends it with SIGSEGV)."""
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(script)], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout
+
+
 @pytest.mark.parametrize("count", [2.5, "3", None, -1])
 def test_a_number_of_steps_that_is_not_one_is_refused_in_one_line(count):
     master, _ = _system(None)
@@ -41,7 +50,7 @@ def test_stepping_outside_the_open_run_is_refused_not_made():
 
 def test_a_step_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
     # a call on a freed pythonfmu instance ended the process with SIGSEGV
-    script = textwrap.dedent("""
+    script = """
         import sys
         import sewfmu
         from sewfmu.scenarios.cosim.master import Master
@@ -53,11 +62,9 @@ def test_a_step_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
             master.step()
         except sewfmu.Error as err:
             print(err)
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert "the run is not open" in proc.stdout
+    """
+    out = _in_a_process(script)
+    assert "the run is not open" in out
 
 
 def test_questions_before_the_run_is_opened_are_refused_and_answered_after_it_closed():
@@ -96,7 +103,7 @@ def test_a_snapshot_comes_back_only_in_its_own_open_run():
 
 
 def test_a_restore_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
-    script = textwrap.dedent("""
+    script = """
         import sewfmu
         from sewfmu.scenarios.cosim.master import Master
         from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
@@ -111,11 +118,9 @@ def test_a_restore_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
                 master.restore_state(saved)
             except sewfmu.Error as err:
                 print(err)
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert "not saved in this open run" in proc.stdout
+    """
+    out = _in_a_process(script)
+    assert "not saved in this open run" in out
 
 
 @pytest.mark.parametrize("master", ["jacobi", "adaptive"])
@@ -161,7 +166,7 @@ def test_after_a_failed_step_the_run_goes_on_only_from_a_state_saved_before():
 
 def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_paths):
     # the stepping thread called an FMU instance the closing thread had freed: SIGSEGV
-    script = textwrap.dedent("""
+    script = """
         import threading, time
         import sewfmu
         from sewfmu.scenarios.cosim.master import Master
@@ -182,17 +187,15 @@ def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_pa
         master.close()
         thread.join()
         print(told, master.k < master.n_steps)
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert "the run is not open" in proc.stdout and "True" in proc.stdout
+    """
+    out = _in_a_process(script)
+    assert "the run is not open" in out and "True" in out
 
 
 def test_closing_or_opening_from_two_threads_at_any_moment_neither_crashes_nor_leaks(fmu_paths):
     # close() while the other thread was still opening freed what the opening then stepped
     # (SIGSEGV); two threads opening at once both "opened", the first run's instances leaked
-    script = textwrap.dedent("""
+    script = """
         import threading, time
         import sewfmu
         from sewfmu.scenarios.cosim.master import Master
@@ -230,11 +233,9 @@ def test_closing_or_opening_from_two_threads_at_any_moment_neither_crashes_nor_l
             thread.join()
         master.close()
         print(sorted(set(outcomes)), sorted(opened))
-    """)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    outcomes, opened = eval(proc.stdout.strip().replace("] [", "], ["))
+    """
+    out = _in_a_process(script)
+    outcomes, opened = eval(out.strip().replace("] [", "], ["))
     assert set(outcomes) <= {"ran", "refused"}
     assert opened == ["open already", "opened"]
 
