@@ -1,0 +1,183 @@
+"""What every request to the page passes before Flask or Dash sees it (docs/app.md, Security):
+
+- its Host must be one the server was started to answer (loopback names, what --host names,
+  --allow-host): a page elsewhere that rebinds its own name to 127.0.0.1 sends its own name;
+- a request that can change something (any method but GET, HEAD, OPTIONS) must come from the
+  page itself: its Origin, or its Referer where a client sends no Origin, names an allowed host
+  (a page on another site that posts a Run sends its own; a client that sends neither is no
+  browser, which always sends Origin with a POST, and could as well send any header it likes);
+- its body is at most `max_body` bytes: a longer Content-Length is refused before a byte is
+  read, and so is a body of no stated length (chunked);
+- every answer says how a browser may use it: not as another site's resource, nor in a frame.
+
+A WSGI middleware, so that it holds for every route: the page, its assets, Dash's routes, the
+files of runs, and the 404s."""
+from __future__ import annotations
+
+import ipaddress
+import re
+from dataclasses import dataclass, field
+from urllib.parse import urlsplit
+
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+EVERY_ADDRESS = ("0.0.0.0", "::", "")        # --host values that are no name a browser sends
+SAFE_METHODS = ("GET", "HEAD", "OPTIONS")    # nothing of the page's changes on these
+MAX_BODY_MB = 4.0     # a callback's request is a few kB; a sweep's 400 points about 100 kB
+# on every answer: no sniffing a file into a script, no reading it as another site's resource
+# (a <script> or <img> there), no showing the page in another site's frame (a click taken there)
+HEADERS = [("X-Content-Type-Options", "nosniff"),
+           ("Cross-Origin-Resource-Policy", "same-origin"),
+           ("X-Frame-Options", "DENY"),
+           ("Content-Security-Policy", "frame-ancestors 'none'"),
+           ("Referrer-Policy", "same-origin")]
+_HOST = re.compile(r"(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9._-]+)(?::([0-9]{1,5}))?")
+
+
+@dataclass(frozen=True)
+class Allowed:
+    """The hosts a request may name: `names` on the server's `port` (None: on any, as for a
+    test client), `anywhere` on any port (--allow-host NAME, e.g. a proxy's), `exact` (name,
+    port) pairs (--allow-host NAME:PORT). A Host header without a port (the client's default
+    port: a port-forward or a proxy may have changed it) passes on its name alone; an origin
+    always has its port (80 or 443 where it names none)."""
+    names: frozenset
+    port: int | None = None
+    anywhere: frozenset = field(default_factory=frozenset)
+    exact: frozenset = field(default_factory=frozenset)
+
+    def admits(self, name: str, port: int | None) -> bool:
+        if port is None:
+            return name in self.names or name in self.anywhere or \
+                any(name == n for n, _ in self.exact)
+        return (name in self.names and (self.port is None or port == self.port)) or \
+            name in self.anywhere or (name, port) in self.exact
+
+    def admits_origin(self, url: str) -> bool:
+        """An Origin or Referer that names an allowed host (scheme http or https)."""
+        try:
+            parts = urlsplit(url)
+            port = parts.port
+        except ValueError:
+            return False
+        if parts.scheme not in ("http", "https") or not parts.hostname:
+            return False
+        port = port if port is not None else {"http": 80, "https": 443}[parts.scheme]
+        return self.admits(_bare(parts.hostname), port)
+
+
+def allowed_hosts(host: str, port: int | None, allow: list[str] | tuple = ()) -> Allowed:
+    """The hosts a server started on `host`:`port` answers: the loopback names, `host` itself
+    (unless it is every address), and each of `allow` (NAME or NAME:PORT, checked by
+    host_name)."""
+    names = set(LOOPBACK)
+    if host not in EVERY_ADDRESS:
+        names.add(_bare(host.lower()))
+    anywhere, exact = set(), set()
+    for item in allow:
+        name, given = split_host(item)
+        if given is None:
+            anywhere.add(name)
+        else:
+            exact.add((name, given))
+    return Allowed(frozenset(names), port, frozenset(anywhere), frozenset(exact))
+
+
+def is_loopback(host: str) -> bool:
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(_bare(host)).is_loopback
+    except ValueError:
+        return False
+
+
+def split_host(text: str) -> tuple[str, int | None]:
+    """A Host header (or --allow-host) as (name, port or None): the name lowercase, an IPv6
+    address without its brackets. ValueError for anything else (a path, a scheme, a bad port)."""
+    found = _HOST.fullmatch(text.strip())
+    if not found or (found.group(2) is not None and not 1 <= int(found.group(2)) <= 65535):
+        raise ValueError(text)
+    name = found.group(1).lower()
+    if name.startswith("["):
+        ipaddress.IPv6Address(name[1:-1])        # ValueError if it is not an address
+    return _bare(name), int(found.group(2)) if found.group(2) else None
+
+
+def _bare(name: str) -> str:
+    return name[1:-1] if name.startswith("[") and name.endswith("]") else name
+
+
+class Guard:
+    """The WSGI app `app` behind the checks above."""
+
+    def __init__(self, app, allowed: Allowed, max_body: int):
+        self.app = app
+        self.allowed = allowed
+        self.max_body = max_body
+
+    def __call__(self, environ, start_response):
+        # the server's hook (serve._Quiet): the client's input is read no further after the
+        # answer, but for a moment and a bounded amount, where werkzeug reads on to 10 GB
+        stop = environ.get("sewfmu.stop_reading", _nothing)
+        refused = self.refusal(environ)
+        if refused is not None:
+            stop()
+            status, line = refused
+            body = (line + "\n").encode()
+            start_response(status, [("Content-Type", "text/plain; charset=utf-8"),
+                                    ("Content-Length", str(len(body))), *HEADERS])
+            return [body]
+
+        def start(status, headers, exc_info=None):
+            # no header that would let another site read an answer (CORS), ours added
+            kept = [(k, v) for k, v in headers if not k.lower().startswith("access-control-")
+                    and k.lower() not in {h.lower() for h, _ in HEADERS}]
+            return start_response(status, kept + HEADERS, exc_info)
+        return _then(self.app(environ, start), stop)
+
+    def refusal(self, environ) -> tuple[str, str] | None:
+        """(status, one line) for a request refused, or None."""
+        try:
+            name, port = split_host(environ.get("HTTP_HOST", ""))
+        except ValueError:
+            return "403 Forbidden", "refused: no Host header this server answers"
+        if not self.allowed.admits(name, port):
+            return "403 Forbidden", (f"refused: this server does not answer to the host "
+                                     f"{environ['HTTP_HOST'][:80]!r}; start it with "
+                                     f"--allow-host NAME[:PORT] to name another")
+        if environ.get("REQUEST_METHOD", "GET").upper() not in SAFE_METHODS:
+            origin = environ.get("HTTP_ORIGIN")
+            which = "Origin" if origin is not None else "Referer"
+            came = origin if origin is not None else environ.get("HTTP_REFERER")
+            if came is not None and not self.allowed.admits_origin(came):
+                return "403 Forbidden", (f"refused: a request from another site ({which} "
+                                         f"{came[:80]!r}) may not change anything here")
+        if "chunked" in environ.get("HTTP_TRANSFER_ENCODING", "").lower():
+            # a body of no stated length: neither the page nor Dash sends one, and the server's
+            # reading of it (werkzeug's) reads a chunk's size line without a bound
+            return "411 Length Required", ("refused: a body without Content-Length "
+                                           "(chunked); send it with its length")
+        length = environ.get("CONTENT_LENGTH", "").strip()
+        if length:
+            if not length.isdigit() or len(length) > 18:
+                return "400 Bad Request", "refused: Content-Length is not a number of bytes"
+            if int(length) > self.max_body:
+                return "413 Request Entity Too Large", (
+                    f"refused: a body of {int(length)} bytes; this server reads at most "
+                    f"{self.max_body} (sewfmu app --max-request-mb)")
+        return None
+
+
+def _then(answer, stop):
+    """The app's answer, then `stop` (before the server would drain the client's input)."""
+    try:
+        yield from answer
+    finally:
+        close = getattr(answer, "close", None)
+        if close is not None:
+            close()
+        stop()
+
+
+def _nothing() -> None:
+    pass
