@@ -45,11 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.analyses import punch
-from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.cosim.divergence import Diverged
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.mechanisms import punch
 from sewfmu.scenarios.runs.compare import monolithic_summary
 from sewfmu.scenarios.runs.runner import simulate, summarize
 
@@ -122,7 +121,7 @@ class Script:
 
     def compute(self, figs: Figures) -> dict:
         t_end = 10 * 2 * math.pi / 100.0
-        solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
+        solution = punch.solve({}, {}, {}, t_end, sample_step=2.5e-4,
                                           sample_from=t_end - 2.2 * math.pi / 100.0,
                                           rtol=self.rtol, atol=self.rtol * 1e-3)
         summary, tight = punch.summary_of_monolithic(solution), figs.tight(100.0)
@@ -168,7 +167,7 @@ class HeldOnStop:
         for name, value in values.items():
             sc.set_value(f"punch.{name}", value)
         result = figs.run(sc)
-        mono = punch_monolithic.solve({"omega0": 100.0}, {}, values, result.time[-1],
+        mono = punch.solve({"omega0": 100.0}, {}, values, result.time[-1],
                                       sample_step=sc.even_steps()[1], sample_switches=False)
         n = len(result.time) - 1
         return {"held_pct": 100.0 * float(np.mean(mono.held[:n])),
@@ -226,7 +225,7 @@ def trajectory_error(sc, result) -> float:
     """Largest |y − y_ref| at the communication points, against a dense monolithic solution on
     the run's own grid (its whole, even steps)."""
     omega = sc.instances["shaft"].parameters.get("omega0", 100.0)
-    mono = punch_monolithic.solve({"omega0": omega}, {}, {}, result.time[-1],
+    mono = punch.solve({"omega0": omega}, {}, {}, result.time[-1],
                                   sample_step=sc.even_steps()[1], sample_switches=False)
     n = len(result.time) - 1              # the last step may be shorter: compare the grid
     assert np.allclose(mono.time[:n], result.time[:n], rtol=0, atol=1e-12)

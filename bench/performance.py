@@ -32,10 +32,9 @@ from sewfmu.scenarios.runs.runner import simulate, summarize
 HERE = Path(__file__).resolve().parent
 MONOLITHIC = """
 import math
-from sewfmu.scenarios.analyses.solutions import punch_monolithic
-from sewfmu.scenarios.analyses import punch
+from sewfmu.scenarios.mechanisms import punch
 t_end = 10 * 2 * math.pi / 100.0
-ref = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,
+ref = punch.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=2.5e-4,
                             sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-8, atol=1e-11)
 print(punch.summary_of_monolithic(ref))
 """

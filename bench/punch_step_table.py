@@ -10,8 +10,8 @@ import argparse
 
 import numpy as np
 
-from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.mechanisms import punch
 from sewfmu.scenarios.runs.compare import monolithic_summary
 from sewfmu.scenarios.runs.runner import simulate, summarize
 
@@ -35,7 +35,7 @@ def main():
         sc.step, sc.master = h, args.master
         result = simulate(sc)
         fig = summarize(result)
-        dense = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
+        dense = punch.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
                                       sample_switches=False)
         n = len(result.time) - 1
         dy = np.max(np.abs(result["punch.y"][:n] - dense.y[:n]))

@@ -39,10 +39,9 @@ ONSET_WITHIN, FORCE_WITHIN = 0.002, 0.002          # ° and N from the tight sol
 
 MONOLITHIC_SCRIPT = """
 import math
-from sewfmu.scenarios.analyses.solutions import punch_monolithic
-from sewfmu.scenarios.analyses import punch
+from sewfmu.scenarios.mechanisms import punch
 t_end = 10 * 2 * math.pi / 100.0
-solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
+solution = punch.solve({}, {}, {}, t_end, sample_step=2.5e-4,
                                   sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-4,
                                   atol=1e-7)
 print(punch.summary_of_monolithic(solution))
@@ -77,10 +76,9 @@ def _errors(figures: dict, tight: dict) -> tuple[float, float]:
 
 
 def _monolithic_in_process():
-    from sewfmu.scenarios.analyses import punch
-    from sewfmu.scenarios.analyses.solutions import punch_monolithic
+    from sewfmu.scenarios.mechanisms import punch
     t_end = 10 * 2 * math.pi / 100.0
-    solution = punch_monolithic.solve({}, {}, {}, t_end, sample_step=2.5e-4,
+    solution = punch.solve({}, {}, {}, t_end, sample_step=2.5e-4,
                                       sample_from=t_end - 2.2 * math.pi / 100.0, rtol=1e-4,
                                       atol=1e-7)
     return punch.summary_of_monolithic(solution)

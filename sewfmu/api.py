@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from sewfmu.errors import Error
-from sewfmu.scenarios.analyses import figure_units, figures_of
+from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
@@ -158,7 +158,7 @@ class Run:
         numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
         [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
         point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
-        from sewfmu.scenarios.animations import linkage  # loaded on first use (start-up time)
+        from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
         from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
 
         if self.scenario is None or self.series is None:
@@ -356,7 +356,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         if out is not None and (plot or report):
             sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
-    units.update({"stop_time": "s", "wall_time_s": "s", **figure_units(sc.analysis, sc.study)})
+    units.update({"stop_time": "s", "wall_time_s": "s", **sc.figure_units()})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
 
@@ -410,7 +410,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     if rtol is not None and (isinstance(rtol, bool) or not isinstance(rtol, (int, float))
                              or not 0.0 < rtol < 1.0):
         raise ScenarioError(f"rtol: expected a relative tolerance between 0 and 1, got {rtol!r}")
-    units = {**figure_units(sc.analysis, sc.study), "wall_time_s": "s"}
+    units = {**sc.figure_units(), "wall_time_s": "s"}
     out = {}
     for row in compare_rows(sc, rtol=rtol):
         if rtol is None:

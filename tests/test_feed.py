@@ -7,8 +7,8 @@ import pytest
 
 from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
-from sewfmu.scenarios.analyses.feed import ratio_study
-from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.mechanisms.feed import ratio_study
+from sewfmu.scenarios.mechanisms.sampling import sampled
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.runs.runner import summarize

@@ -17,7 +17,7 @@ from sewfmu.components.kinematics import (
     point_on_link,
 )
 from sewfmu.components.punch_linkage import REQUIRED_DISPLACEMENT, PunchLinkage, PunchLinkageParams
-from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.mechanisms.sampling import sampled
 
 
 def _crank_driven_dyad(t, side):

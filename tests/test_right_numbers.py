@@ -17,7 +17,7 @@ from scipy.linalg import eigh
 from sewfmu.cli import main
 from sewfmu.components.carriage import CarriageModal, CarriageParams
 from sewfmu.console import explain
-from sewfmu.scenarios.analyses import RunTooShort
+from sewfmu.scenarios.mechanisms.base import RunTooShort
 from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.cosim.master import Master, run
 from sewfmu.scenarios.format.loader import load

@@ -92,29 +92,32 @@ def test_the_bound_instance_is_the_one_analysed(tmp_path):
                                                    tmp_path / "soft")["contact_loss_deg"]
 
 
-def test_every_mechanism_is_declared_once_in_its_analysis_module():
-    """The descriptors are the one list of mechanisms: each names known FMUs for its roles,
-    units for its figures, an animation that exists and studies of their own; and no module
-    outside scenarios/analyses lists the analyses by name."""
-    import importlib
+def test_every_mechanism_is_declared_once_in_its_module():
+    """The mechanisms' modules are the one list of mechanisms: each names known FMUs for its
+    roles, units for its figures, a drawing where it draws itself and studies of their own; and
+    no module outside scenarios/mechanisms lists the analyses by name."""
     import re
     from pathlib import Path
 
     from sewfmu.components.registry import FMUS
-    from sewfmu.scenarios import analyses
+    from sewfmu.scenarios import mechanisms as registry
+    from sewfmu.scenarios.mechanisms import SHARED, mechanisms
 
-    found = analyses.mechanisms()
-    assert set(found) == {p.stem for p in Path(analyses.__file__).parent.glob("*.py")
-                          if p.stem != "__init__"}
+    found = mechanisms()
+    folder = Path(registry.__file__).parent
+    assert set(found) == {p.stem for p in folder.glob("*.py")
+                          if p.stem != "__init__" and p.stem not in SHARED}
     for name, m in found.items():
+        assert m.name == name
         assert m.roles and set(m.roles.values()) <= set(FMUS), name
         assert m.figures and all(isinstance(u, str) and u for u in m.figures.values()), name
-        if m.animation:
-            importlib.import_module(f"sewfmu.scenarios.animations.{m.animation}").Scene
+        assert m.Scene is None or all(callable(getattr(m.Scene, f)) for f in ("points", "draw"))
         for study in m.studies.values():
             assert callable(study.compute) and callable(study.plot) and study.units
-    scenarios = Path(analyses.__file__).parent.parent
-    for path in [*scenarios.glob("*.py"), *(scenarios / "animations").glob("*.py")]:
+    scenarios = folder.parent
+    for path in [*scenarios.rglob("*.py")]:
+        if path.parent == folder:
+            continue
         text = path.read_text(encoding="utf-8")
         listed = re.findall(r"[\[{(]\s*\"punch\",\s*\"punch_split\"", text)
         assert not listed, path

@@ -101,7 +101,7 @@ def test_a_study_is_swept_like_a_scenario(tmp_path):
 
 
 def test_every_study_of_every_analysis_has_its_catalogue_scenario():
-    from sewfmu.scenarios.analyses import studies
+    from sewfmu.scenarios.mechanisms import studies
 
     for name, (analysis, _) in studies().items():
         scenario = sewfmu.load(name)

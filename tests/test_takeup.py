@@ -8,8 +8,8 @@ import pytest
 
 from sewfmu.components.kinematics import AssemblyError, point_on_link
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
-from sewfmu.scenarios.analyses.solutions.sampling import sampled
-from sewfmu.scenarios.analyses.takeup import path_stroke, tolerance_study
+from sewfmu.scenarios.mechanisms.sampling import sampled
+from sewfmu.scenarios.mechanisms.takeup import path_stroke, tolerance_study
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.runs.runner import summarize

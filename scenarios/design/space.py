@@ -17,7 +17,6 @@ import numpy as np
 
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.units import UnitError
-from sewfmu.scenarios.analyses import figure_units
 from sewfmu.scenarios.cosim.divergence import declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.format.quantities import in_declared_unit
@@ -139,7 +138,7 @@ def figures_of_scenario(scenario: Scenario) -> dict[str, str]:
     if not scenario.analysis:
         raise ScenarioError(f"{scenario.source}: the scenario has no analysis, so no key figures "
                             f"for a design study to read")
-    return figure_units(scenario.analysis, scenario.study)
+    return scenario.figure_units()
 
 
 def check_figure(name: str, known: Mapping[str, str], where: str) -> str:

@@ -11,6 +11,7 @@ from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.fmu_file import check_parameter, fmu_path, is_fmu_file, read_fmu
 from sewfmu.scenarios.format.master_settings import MASTER_NAMES
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
+from sewfmu.scenarios.mechanisms import RoleError, mechanism
 from sewfmu.scenarios.format.values import (
     ScenarioError,
     check_instance_name,
@@ -193,9 +194,7 @@ def _check_compare(scenario: Scenario, source: str) -> None:
 
 
 def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict[str, str]:
-    """The analysis's roles bound to instances (see scenarios/analyses), or {} without one."""
-    from sewfmu.scenarios.analyses import RoleError, bind  # loaded on first use (start-up time)
-
+    """The analysis's roles bound to instances (scenarios/mechanisms), or {} without one."""
     analysis, given = data.get("analysis"), data.get("roles", {})
     if analysis is None:
         if given:
@@ -206,7 +205,8 @@ def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict
     if not isinstance(given, dict) or not all(isinstance(v, str) for v in given.values()):
         raise ScenarioError(f"{source}: roles must be a table of role = \"instance\"")
     try:
-        return bind(analysis, {name: inst.fmu for name, inst in instances.items()}, given)
+        return mechanism(analysis).bind({name: inst.fmu for name, inst in instances.items()},
+                                        given)
     except RoleError as err:
         raise ScenarioError(f"{source}: {err}") from None
 
@@ -243,9 +243,7 @@ def _parse_connection(text: Any, instances: dict, source: str) -> Connection:
 
 def _study_of(data: dict, source: str) -> str | None:
     """A study of the scenario's analysis (computed from its instances' parameters, not
-    co-simulated: scenarios/analyses), or None."""
-    from sewfmu.scenarios.analyses import mechanism  # loaded on first use (start-up time)
-
+    co-simulated: scenarios/mechanisms), or None."""
     study = data.get("study")
     if study is None:
         return None

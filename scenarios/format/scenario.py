@@ -16,6 +16,7 @@ from sewfmu.scenarios.format.declared_units import parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import ScenarioError, plain, positive, positive_in, short
+from sewfmu.scenarios.mechanisms import Mechanism, RoleError, mechanism
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,23 @@ class Scenario:
     fmu_files: dict[str, Path] = field(default_factory=dict)
     # a study of its analysis: computed from its instances' parameters, not co-simulated
     study: str | None = None
+    # the mechanism its analysis names (scenarios/mechanisms), resolved once, here
+    mechanism: Mechanism | None = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        if self.analysis is None:
+            return
+        if not isinstance(self.analysis, str):
+            raise ScenarioError(f"{self.source}: analysis must be a name, got {short(self.analysis)}")
+        try:
+            self.mechanism = mechanism(self.analysis)
+        except RoleError as err:
+            raise ScenarioError(f"{self.source}: {err}") from None
+
+    def figure_units(self) -> dict[str, str]:
+        """The units of its key figures, or of its study's headline figures ({} without an
+        analysis)."""
+        return self.mechanism.figure_units(self.study) if self.mechanism else {}
 
     def settings(self):
         """The typed settings of its master (scenarios/format/master_settings.py): the file's

@@ -309,11 +309,11 @@ def _annotation(root: ET.Element, where: str) -> tuple[dict[str, str], list[str]
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
     """The analysis whose roles the components' FMU types fill, if one does."""
-    from sewfmu.scenarios.analyses import RoleError, bind, mechanisms  # loaded on first use (start-up time)
+    from sewfmu.scenarios.mechanisms import RoleError, mechanisms  # loaded on first use (start-up time)
 
-    for analysis in mechanisms():
+    for analysis, found in mechanisms().items():
         try:
-            return analysis, bind(analysis, fmu_of, {})
+            return analysis, found.bind(fmu_of, {})
         except RoleError:
             continue
     return None, {}

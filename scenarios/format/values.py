@@ -9,11 +9,7 @@ import math
 import tomllib
 from typing import Any
 
-from sewfmu.errors import Error
-
-
-class ScenarioError(Error, ValueError):
-    """A scenario that cannot run, with the file and key it comes from."""
+from sewfmu.errors import Error, ScenarioError  # noqa: F401 (ScenarioError: where the wings import it from)
 
 
 def check_instance_name(name: str) -> None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.analyses import figures_of
+from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario

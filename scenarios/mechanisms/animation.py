@@ -1,4 +1,5 @@
-"""The mechanisms moving: an animated GIF of the recorded co-simulation, one module per mechanism.
+"""The mechanisms moving: an animated GIF of the recorded co-simulation, of any mechanism that
+draws itself (its `Scene`, in its module).
 
 Each frame shows one recorded communication point of the run's last shaft revolution (one
 stitch): the frames are the samples nearest to FRAMES equally spaced crank angles. What the run
@@ -13,14 +14,13 @@ can find that point in a frame from the recorded columns alone.
 """
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios import analyses
+from sewfmu.scenarios.mechanisms.base import RoleError, column, whole_revolution
 
 FRAMES = 36
 FRAME_MS = 90                 # display time of a frame
@@ -49,7 +49,7 @@ class Animation:
 
 def frame_samples(phi: np.ndarray, frames: int = FRAMES) -> list[int]:
     """The recorded samples nearest to `frames` equally spaced angles of the last revolution."""
-    start, _ = analyses.whole_revolution(float(phi[-1]))
+    start, _ = whole_revolution(float(phi[-1]))
     targets = start + 2 * math.pi * np.arange(frames) / frames
     idx = np.clip(np.searchsorted(phi, targets), 1, len(phi) - 1)
     nearer_left = (targets - phi[idx - 1]) < (phi[idx] - targets)
@@ -60,8 +60,16 @@ def frame_samples(phi: np.ndarray, frames: int = FRAMES) -> list[int]:
 
 
 def can_animate(scenario) -> bool:
-    """Whether the scenario's mechanism has an animation (its analysis's descriptor says)."""
-    return bool(scenario.analysis) and analyses.mechanism(scenario.analysis).animation is not None
+    """Whether the scenario's mechanism draws itself."""
+    return scenario.mechanism is not None and scenario.mechanism.animated
+
+
+def _scene(result):
+    """The drawing of the run's mechanism at its recorded samples."""
+    found = result.scenario.mechanism
+    if found is None or not found.animated:
+        raise RoleError(f"no drawing of the {result.scenario.analysis!r} analysis's mechanism")
+    return found.Scene(result)
 
 
 def animate(result, path: Path) -> Animation:
@@ -72,13 +80,13 @@ def animate(result, path: Path) -> Animation:
     import matplotlib.pyplot as plt  # matplotlib: only when drawing
 
     kind = result.scenario.analysis
-    drawing = analyses.mechanism(kind).animation if kind else None
+    drawing = mechanism(kind).animation if kind else None
     if drawing is None:
-        animated = [name for name, m in analyses.mechanisms().items() if m.animation]
-        raise analyses.RoleError(f"no animation for the {kind!r} analysis "
+        animated = [name for name, m in mechanisms().items() if m.animation]
+        raise RoleError(f"no animation for the {kind!r} analysis "
                                  f"(animated: {', '.join(animated)})")
     scene = importlib.import_module(f"{__name__}.{drawing}").Scene(result)
-    samples = frame_samples(analyses.column(result, "shaft", "phi"))
+    samples = frame_samples(column(result, "shaft", "phi"))
     fig, ax = plt.subplots(figsize=SIZE_IN, dpi=DPI)
     images, tracked = [], []
     try:
@@ -123,8 +131,8 @@ def reach(joints_at, samples, margin: float) -> tuple[tuple[float, float], tuple
 
 def angle_label(result, i: int) -> str:
     """Crank angle within the last revolution and the time of sample i."""
-    phi = analyses.column(result, "shaft", "phi")
-    within = math.degrees(phi[i] - analyses.whole_revolution(float(phi[-1]))[0]) % 360.0
+    phi = column(result, "shaft", "phi")
+    within = math.degrees(phi[i] - whole_revolution(float(phi[-1]))[0]) % 360.0
     return f"φ = {within:5.1f}°   t = {result.time[i]:.4f} s"
 
 
@@ -132,14 +140,10 @@ def linkage(result, frames: int = FRAMES) -> dict:
     """The mechanism's drawing as numbers, for a page that draws it itself: at `frames` equally
     spaced crank angles of the last revolution, every point (mm) and the chains of bars between
     them; the recorded point every animation marks is `tracked`."""
-    kind = result.scenario.analysis
-    drawing = analyses.mechanism(kind).animation if kind else None
-    if drawing is None:
-        raise analyses.RoleError(f"no drawing of the {kind!r} analysis's mechanism")
-    scene = importlib.import_module(f"{__name__}.{drawing}").Scene(result)
-    phi = analyses.column(result, "shaft", "phi")
+    scene = _scene(result)
+    phi = column(result, "shaft", "phi")
     samples = frame_samples(phi, frames)
-    start, _ = analyses.whole_revolution(float(phi[-1]))
+    start, _ = whole_revolution(float(phi[-1]))
     at = [scene.points(i) for i in samples]
     return {"samples": samples,
             "crank_deg": [math.degrees(float(phi[i]) - start) % 360.0 for i in samples],

@@ -13,17 +13,11 @@ instance names are the user's choice.
 """
 from __future__ import annotations
 
-import functools
-import importlib
 import math
-import pkgutil
 from dataclasses import dataclass, field
-from types import ModuleType
 from typing import Callable
 
-from sewfmu.components.parameters import did_you_mean
-from sewfmu.errors import Error
-from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.errors import Error, ScenarioError
 
 
 @dataclass(frozen=True)
@@ -60,20 +54,86 @@ def shaft_at(omega: float) -> Callable[[object], dict]:
                       "epsilon": np.zeros_like(t)}
 
 
-@dataclass(frozen=True)
 class Mechanism:
-    """What sewfmu knows of one mechanism's analysis (declared in its module as MECHANISM)."""
-    roles: dict[str, str]                  # role -> the FMU type that plays it
-    figures: dict[str, str]                # key figure -> unit (summary.json, sweeps, reports)
-    animation: str | None = None           # the module of scenarios/animations that draws it
+    """One mechanism's host side, behind one interface (the shape of scipy's OdeSolver: the base
+    holds what every mechanism shares, each subclass declares only its own). A module of this
+    package holds one subclass and its one instance, `MECHANISM`; the scenario resolves it once,
+    when it loads (`Scenario.mechanism`), and everything else asks the scenario."""
+    name: str = ""                          # the scenario's `analysis`
+    roles: dict[str, str] = {}              # role -> the FMU type that plays it
+    figures: dict[str, str] = {}            # key figure -> unit (summary.json, sweeps, reports)
     # its figures are read from positions the FMUs give exactly at each communication point (a
     # linkage's kinematics): no coupling error to estimate (runs/accuracy.py)
     kinematic: bool = False
-    monolithic: bool = False               # solved as one ODE (its module: monolithic_figures)
-    studies: dict[str, Study] = field(default_factory=dict)
+    studies: dict[str, Study] = {}
     # FMU type -> its regression case, for the FMUs this mechanism brings (the shared MainShaft's
     # is scenarios/references/regression.py's)
-    regression: dict[str, RegressionCase] = field(default_factory=dict)
+    regression: dict[str, RegressionCase] = {}
+    # its drawing (`Scene(result)`: points, chains, draw) for the GIF and the page, or None
+    Scene: type | None = None
+
+    def summary_of_run(self, result) -> dict:
+        """The key figures of a run (its last whole revolution)."""
+        raise NotImplementedError
+
+    def plot(self, curves, path, title: str) -> None:
+        """The run's figure: `curves` are (label, result) pairs drawn over each other."""
+        raise NotImplementedError
+
+    def monolithic_figures(self, scenario, rtol: float | None = None) -> tuple[dict, float]:
+        """The key figures of the same physics solved as one ODE, and the seconds it took."""
+        raise NotImplementedError(f"the {self.name} mechanism has no monolithic solution")
+
+    @property
+    def monolithic(self) -> bool:
+        """Whether it is solved as one ODE (`sewfmu compare`, the report)."""
+        return type(self).monolithic_figures is not Mechanism.monolithic_figures
+
+    @property
+    def animated(self) -> bool:
+        return self.Scene is not None
+
+    def figure_units(self, study: str | None = None) -> dict[str, str]:
+        """The units of its key figures, or of its study's headline figures."""
+        return dict(self.studies[study].units if study else self.figures)
+
+    def bind(self, fmu_of: dict[str, str], given: dict[str, str]) -> dict[str, str]:
+        """role -> instance name: the `given` bindings, checked against the instances' FMU
+        types (`fmu_of`: instance -> FMU), the others found by FMU type."""
+        unknown = [role for role in given if role not in self.roles]
+        if unknown:
+            raise RoleError(f"roles.{unknown[0]}: the {self.name} analysis has no role "
+                            f"{unknown[0]!r} (its roles: {', '.join(self.roles)})")
+        bound = {}
+        for role, fmu in self.roles.items():
+            if role in given:
+                name = given[role]
+                if name not in fmu_of:
+                    raise RoleError(f"roles.{role}: no instance {name!r} "
+                                    f"(instances: {', '.join(fmu_of)})")
+                if fmu_of[name] != fmu:
+                    raise RoleError(f"roles.{role}: {name!r} is an instance of {fmu_of[name]}, "
+                                    f"but the {role} of the {self.name} analysis is a {fmu}")
+                bound[role] = name
+                continue
+            candidates = [name for name, kind in fmu_of.items() if kind == fmu]
+            if len(candidates) != 1:
+                found = (f"instances {', '.join(repr(c) for c in candidates)} are all {fmu}"
+                         if candidates else f"no instance is a {fmu}")
+                raise RoleError(f"the {self.name} analysis needs its {role} ({fmu}): {found}; "
+                                f"name it in the scenario's roles table")
+            bound[role] = candidates[0]
+        return bound
+
+    # one instance per mechanism: a copied or pickled scenario (a sweep's worker) holds the same
+    def __deepcopy__(self, memo):
+        return self
+
+    def __reduce__(self):
+        return "MECHANISM"            # pickled as the module's own instance, by reference
+
+    def __repr__(self) -> str:
+        return f"<mechanism {self.name}>"
 
 
 # what a summary says of the run itself rather than of the mechanism
@@ -87,86 +147,8 @@ def figures_of(summary: dict) -> dict:
     return {k: v for k, v in summary.items() if k not in RUN_KEYS}
 
 
-@functools.cache
-def _names() -> tuple[str, ...]:
-    """The analysis modules of this package (sub-packages hold what the analyses share): a
-    listing of the folder, nothing imported."""
-    return tuple(info.name for info in pkgutil.iter_modules(__path__) if not info.ispkg)
-
-
-@functools.cache
-def _mechanism_of(name: str) -> Mechanism:
-    return importlib.import_module(f"{__name__}.{name}").MECHANISM
-
-
-def mechanisms() -> dict[str, Mechanism]:
-    """Every analysis module of this package by name -> its MECHANISM."""
-    return {name: _mechanism_of(name) for name in _names()}
-
-
-def mechanism(analysis: str) -> Mechanism:
-    """One analysis's MECHANISM; only its own module is imported (a run of the punch drive
-    does not load the carriage's, the feed's and the take-up's models and analyses)."""
-    known = _names()
-    if analysis not in known:
-        raise RoleError(f"unknown analysis {analysis!r}{did_you_mean(analysis, known)} "
-                        f"(known: {', '.join(known)})")
-    return _mechanism_of(analysis)
-
-
-def figure_units(analysis: str | None, study: str | None = None) -> dict[str, str]:
-    """The units of an analysis's key figures, or of its study's headline figures ({} for a run
-    without an analysis)."""
-    if not analysis:
-        return {}
-    found = mechanism(analysis)
-    return dict(found.studies[study].units if study else found.figures)
-
-
-def studies() -> dict[str, tuple[str, Study]]:
-    """Every mechanism's studies: study name -> (analysis, study)."""
-    return {name: (analysis, study) for analysis, m in mechanisms().items()
-            for name, study in m.studies.items()}
-
-
 class RoleError(Error, ValueError):
-    """An analysis that cannot be bound to a scenario's instances."""
-
-
-def bind(analysis: str, fmu_of: dict[str, str], given: dict[str, str]) -> dict[str, str]:
-    """role -> instance name for `analysis`: the `given` bindings, checked against the
-    instances' FMU types (`fmu_of`: instance -> FMU), the others found by FMU type."""
-    wanted = mechanism(analysis).roles
-    unknown = [role for role in given if role not in wanted]
-    if unknown:
-        raise RoleError(f"roles.{unknown[0]}: the {analysis} analysis has no role "
-                        f"{unknown[0]!r} (its roles: {', '.join(wanted)})")
-    bound = {}
-    for role, fmu in wanted.items():
-        if role in given:
-            name = given[role]
-            if name not in fmu_of:
-                raise RoleError(f"roles.{role}: no instance {name!r} "
-                                f"(instances: {', '.join(fmu_of)})")
-            if fmu_of[name] != fmu:
-                raise RoleError(f"roles.{role}: {name!r} is an instance of {fmu_of[name]}, but "
-                                f"the {role} of the {analysis} analysis is a {fmu}")
-            bound[role] = name
-            continue
-        candidates = [name for name, kind in fmu_of.items() if kind == fmu]
-        if len(candidates) != 1:
-            found = (f"instances {', '.join(repr(c) for c in candidates)} are all {fmu}"
-                     if candidates else f"no instance is a {fmu}")
-            raise RoleError(f"the {analysis} analysis needs its {role} ({fmu}): {found}; "
-                            f"name it in the scenario's roles table")
-        bound[role] = candidates[0]
-    return bound
-
-
-def module(analysis: str) -> ModuleType:
-    """The module of an analysis (summary_of_run, plot, FIGURES, its studies)."""
-    mechanism(analysis)
-    return importlib.import_module(f"{__name__}.{analysis}")
+    """A mechanism that cannot be bound to a scenario's instances."""
 
 
 class MissingRecord(ScenarioError, KeyError):

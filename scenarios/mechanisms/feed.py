@@ -17,7 +17,8 @@ import numpy as np
 from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.components.parameters import with_values
-from sewfmu.scenarios.analyses import (
+from sewfmu.scenarios.mechanisms.animation import angle_label, reach
+from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
     RegressionCase,
     Study,
@@ -26,7 +27,7 @@ from sewfmu.scenarios.analyses import (
     parameters,
     shaft_at,
 )
-from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.mechanisms.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"phi3_swing_deg": "deg", "phi5_swing_deg": "deg", "phi7_swing_deg": "deg",
@@ -187,13 +188,82 @@ def _headline(study: dict) -> dict:
             "highest_assembling_l2_over_l8": assembling(study["rod_ratio"], "l2_over_l8", max)}
 
 
-MECHANISM = Mechanism(
-    roles={"shaft": "MainShaft", "feed": "FeedLinkage"}, figures=FIGURES, animation="feed",
-    kinematic=True,
-    regression={"FeedLinkage": RegressionCase(2 * math.pi / 303.5, 5e-5, shaft_at(303.5))},
-    studies={"feed_ratio": Study(
+# --- the drawing (the GIF, the page) ------------------------------------------------------------
+MM = 1e3
+CHAINS = (("A", "B", "C", "D"), ("D", "E"), ("E", "F", "H", "G"), ("G", "N", "K", "A"), ("H", "M"))
+
+
+class Scene:
+    to_scale = True
+    tracked = "M"
+
+    def __init__(self, result):
+        self.result = result
+        self.model = FeedLinkage(with_values(FeedParams(), **parameters(result, "feed")))
+        self.phi = column(result, "shaft", "phi")
+        self.mx = column(result, "feed", "M_x") * MM
+        self.my = column(result, "feed", "M_y") * MM
+        self.last = last_revolution(result).nonzero()[0]
+        self.xlim, self.ylim = reach(self._joints, self.last, 12.0)
+        self.inset = None
+
+    def _joints(self, i: int) -> dict[str, tuple[float, float]]:
+        return {n: (m.x * MM, m.y * MM) for n, m in self.model.motion(self.phi[i]).joints.items()}
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The joints at sample i (mm), M where it was recorded."""
+        return {**self._joints(i), "M": (self.mx[i], self.my[i])}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        return list(CHAINS)
+
+    def draw(self, ax, i: int) -> tuple[float, float]:
+        j = self._joints(i)
+        for chain in CHAINS:
+            ax.plot(*zip(*[j[n] for n in chain]), "o-", color="0.25", lw=1.4, ms=2.5)
+        for pivot in ("A", "D", "G"):
+            ax.plot(*j[pivot], "^", color="0.4", ms=7)
+        done = self.last[self.last <= i]
+        ax.plot(self.mx[self.last], self.my[self.last], color="0.85", lw=1)   # the whole path
+        ax.plot(self.mx[done], self.my[done], color="#aa3377", lw=1.6)       # traced so far
+        self._draw_zoom(ax, i, done)
+        ax.set_title(f"feed mechanism   {angle_label(self.result, i)}", fontsize=9)
+        ax.set_xlabel("x [mm]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        return self.mx[i], self.my[i]
+
+    def _draw_zoom(self, ax, i: int, done) -> None:
+        """M's path enlarged (an inset, to scale at its own magnification)."""
+        if self.inset is not None:
+            self.inset.remove()
+        inset = self.inset = ax.inset_axes([0.05, 0.5, 0.4, 0.45])
+        mx, my = self.mx[self.last], self.my[self.last]
+        inset.plot(mx, my, color="0.8", lw=1)
+        inset.plot(self.mx[done], self.my[done], color="#aa3377", lw=1.6)
+        inset.plot(self.mx[i], self.my[i], "o", color="#aa3377", ms=4)
+        pad = 0.15 * max(np.ptp(mx), np.ptp(my))
+        inset.set_xlim(mx.min() - pad, mx.max() + pad)
+        inset.set_ylim(my.min() - pad, my.max() + pad)
+        inset.set_aspect("equal")
+        inset.set_title("path of M, enlarged", fontsize=7)
+        inset.tick_params(labelsize=6)
+
+class Feed(Mechanism):
+    """The lever-hinge feed mechanism: the shaft drives the feed dog M through two branches."""
+    name = "feed"
+    roles = {"shaft": "MainShaft", "feed": "FeedLinkage"}
+    figures = FIGURES
+    Scene = Scene
+    kinematic = True
+    regression = {"FeedLinkage": RegressionCase(2 * math.pi / 303.5, 5e-5, shaft_at(303.5))}
+    studies = {"feed_ratio": Study(
         "Feed mechanism: swing of the feed-bar lever φ5 for l5/l4 from 3.5 to 7.0 and for the "
         "branches' rod-length ratio l2/l8 from 0.7 to 1.7", ratio_study, plot_study, _headline,
         units={"l5_over_l4": "1", "l2_over_l8": "1", "phi5_amplitude_deg": "deg",
                "lowest_assembling_l2_over_l8": "1", "highest_assembling_l2_over_l8": "1"},
-        roles=("feed",))})
+        roles=("feed",))}
+    summary_of_run = staticmethod(summary_of_run)
+    plot = staticmethod(plot)
+
+
+MECHANISM = Feed()

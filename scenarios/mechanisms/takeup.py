@@ -17,7 +17,8 @@ import numpy as np
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.components.parameters import with_values
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
-from sewfmu.scenarios.analyses import (
+from sewfmu.scenarios.mechanisms.animation import angle_label, reach
+from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
     RegressionCase,
     Study,
@@ -26,7 +27,7 @@ from sewfmu.scenarios.analyses import (
     parameters,
     shaft_at,
 )
-from sewfmu.scenarios.analyses.solutions.sampling import sampled
+from sewfmu.scenarios.mechanisms.sampling import sampled
 
 # the key figures of a run and their units (summary.json, sweeps, reports)
 FIGURES = {"path_extent_z_mm": "mm", "path_extent_x_mm": "mm", "stroke_mm": "mm",
@@ -235,15 +236,70 @@ def plot_tolerance(study: dict, path) -> None:
 REGRESSION_SPEED = 523.5987755982989      # rad/s: 5000 rpm, one revolution for its reference
 
 
-MECHANISM = Mechanism(
-    roles={"shaft": "MainShaft", "takeup": "TakeupLinkage"}, figures=FIGURES, animation="takeup",
-    kinematic=True,
-    regression={"TakeupLinkage": RegressionCase(2 * math.pi / REGRESSION_SPEED, 2e-5,
-                                                shaft_at(REGRESSION_SPEED))},
-    studies={"takeup_tolerance": Study(
+# --- the drawing (the GIF, the page) ------------------------------------------------------------
+MM = 1e3
+
+
+class Scene:
+    to_scale = True
+    tracked = "E"
+
+    def __init__(self, result):
+        self.result = result
+        self.model = TakeupLinkage(with_values(TakeupParams(),
+                                               **parameters(result, "takeup")))
+        self.phi = column(result, "shaft", "phi")
+        self.ez = column(result, "takeup", "E_z") * MM
+        self.ex = column(result, "takeup", "E_x") * MM
+        self.last = last_revolution(result).nonzero()[0]
+        self.xlim, self.ylim = reach(self._joints, self.last, 8.0)
+
+    def _joints(self, i: int) -> dict[str, tuple[float, float]]:
+        m, p = self.model.motion(self.phi[i]), self.model.p
+        return {"A": (0.0, 0.0), "B": (m.B.x * MM, m.B.y * MM), "C": (m.C.x * MM, m.C.y * MM),
+                "D": (p.z_D * MM, p.x_D * MM), "E": (m.E.x * MM, m.E.y * MM)}
+
+    def points(self, i: int) -> dict[str, tuple[float, float]]:
+        """The joints at sample i (mm), the eye E where it was recorded."""
+        return {**self._joints(i), "E": (self.ez[i], self.ex[i])}
+
+    def chains(self) -> list[tuple[str, ...]]:
+        return [("A", "B", "C", "D"), ("B", "E", "C")]
+
+    def draw(self, ax, i: int) -> tuple[float, float]:
+        j = self._joints(i)
+        ax.plot(*zip(*[j[n] for n in ("A", "B", "C", "D")]), "o-", color="0.25", lw=1.5, ms=3)
+        ax.fill(*zip(*[j[n] for n in ("B", "C", "E")]), color="#4477aa", alpha=0.35)
+        ax.plot(*zip(*[j[n] for n in ("B", "E", "C")]), "-", color="#4477aa", lw=1.2)
+        for pivot in ("A", "D"):
+            ax.plot(*j[pivot], "^", color="0.4", ms=7)
+        done = self.last[self.last <= i]
+        ax.plot(self.ez[self.last], self.ex[self.last], color="0.85", lw=1)
+        ax.plot(self.ez[done], self.ex[done], color="#aa3377", lw=1.6)
+        ax.set_title(f"thread take-up   {angle_label(self.result, i)}", fontsize=9)
+        ax.set_xlabel("Z [mm]", fontsize=8)
+        ax.set_ylabel("X [mm]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        return self.ez[i], self.ex[i]
+
+class Takeup(Mechanism):
+    """The four-bar thread take-up: the eye E on the coupler traces the willow leaf."""
+    name = "takeup"
+    roles = {"shaft": "MainShaft", "takeup": "TakeupLinkage"}
+    figures = FIGURES
+    Scene = Scene
+    kinematic = True
+    regression = {"TakeupLinkage": RegressionCase(2 * math.pi / REGRESSION_SPEED, 2e-5,
+                                                  shaft_at(REGRESSION_SPEED))}
+    studies = {"takeup_tolerance": Study(
         "Thread take-up: E's path with link lengths off by ±0.1 mm, and the stroke against the "
         "eccentric-pin adjustment of L_CD (±1 mm)", tolerance_study, plot_tolerance,
         lambda s: {k: s[k] for k in ("nominal_stroke_mm",
                                      "stroke_change_per_mm_of_pin_adjustment")},
         units={"nominal_stroke_mm": "mm", "stroke_change_per_mm_of_pin_adjustment": "mm/mm"},
-        roles=("takeup",))})
+        roles=("takeup",))}
+    summary_of_run = staticmethod(summary_of_run)
+    plot = staticmethod(plot)
+
+
+MECHANISM = Takeup()

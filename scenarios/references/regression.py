@@ -7,7 +7,7 @@ with the package (scenarios/references/regression_references/):
 
 Each is made with the FMU's default parameters, so that anyone can reproduce it (fmuCheck does,
 with the reference's input, step and stop time). Not to be confused with the monolithic solution
-of the punch drive (scenarios/analyses/solutions/punch_monolithic.py), against which the physics is checked.
+of the punch drive (scenarios/mechanisms/punch.py), against which the physics is checked.
 
 Each FMU runs alone in fmpy's simulate_fmu, its inputs from _in.csv; its case (stop time, step,
 inputs) is declared by its mechanism's descriptor. The inputs are made from the
@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.analyses import RegressionCase, mechanisms
+from sewfmu.scenarios.mechanisms import mechanisms
+from sewfmu.scenarios.mechanisms.base import RegressionCase
 from sewfmu.scenarios.references import fmu_reference
 from sewfmu.scenarios.references.fmu_reference import Experiment
 
@@ -31,7 +32,7 @@ REFERENCE_DIR = Path(__file__).resolve().parent / "regression_references"
 
 def cases() -> dict[str, RegressionCase]:
     """Every FMU's regression case: the shared MainShaft's, and each mechanism's own (declared
-    in its descriptor, scenarios/analyses/)."""
+    in its module, scenarios/mechanisms/)."""
     found = {"MainShaft": RegressionCase(0.2, 1e-3)}
     for mechanism in mechanisms().values():
         found.update(mechanism.regression)

@@ -21,7 +21,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from sewfmu.errors import Error
-from sewfmu.scenarios import analyses
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.divergence import Diverged
 from sewfmu.scenarios.format.scenario import Scenario
@@ -59,10 +58,10 @@ def estimate(scenario: Scenario, summary: dict, fmu_dir: Path | None = None) -> 
     if scenario.accuracy == "off":
         return {"method": None, "figures": {},
                 "none": "experiment.accuracy = \"off\""}
-    if analyses.mechanism(scenario.analysis).kinematic:
+    if scenario.mechanism.kinematic:
         return {"method": None, "figures": {},
                 "none": "kinematic: the FMUs give exact positions at every communication point"}
-    names = [k for k in analyses.mechanism(scenario.analysis).figures
+    names = [k for k in scenario.mechanism.figures
              if isinstance(summary.get(k), (int, float))]
     if not names:                         # no figures (a narrowed record): nothing to estimate
         return None

@@ -4,17 +4,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sewfmu.scenarios import analyses
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.runner import simulate, summarize
 
 
 def comparison_rows(cosim: dict, monolithic: dict,
-                    analysis: str) -> list[tuple[str, object, object, object]]:
-    """(figure, co-simulation, monolithic, difference) for every key figure of the analysis."""
+                    figures: dict) -> list[tuple[str, object, object, object]]:
+    """(figure, co-simulation, monolithic, difference) for every key figure of `figures`."""
     rows = []
-    for key in analyses.mechanism(analysis).figures:
+    for key in figures:
         a, b = cosim.get(key), monolithic.get(key)
         diff = a - b if isinstance(a, (int, float)) and isinstance(b, (int, float)) else None
         rows.append((key, a, b, diff))
@@ -23,11 +22,11 @@ def comparison_rows(cosim: dict, monolithic: dict,
 
 def monolithic_summary(scenario: Scenario, rtol: float | None = None) -> tuple[dict, float]:
     """Key figures of the scenario's monolithic solution (tight tolerances, or `rtol`) and its
-    wall time; the analysis module solves it (`monolithic_figures`)."""
-    if not (scenario.analysis and analyses.mechanism(scenario.analysis).monolithic):
+    wall time; its mechanism solves it (`monolithic_figures`)."""
+    if not (scenario.mechanism and scenario.mechanism.monolithic):
         raise ScenarioError(f"{scenario.source}: no monolithic solution for analysis "
                             f"{scenario.analysis!r}")
-    return analyses.module(scenario.analysis).monolithic_figures(scenario, rtol)
+    return scenario.mechanism.monolithic_figures(scenario, rtol)
 
 
 def compare(scenario: Scenario, fmu_dir: Path | None = None,
@@ -39,12 +38,12 @@ def compare(scenario: Scenario, fmu_dir: Path | None = None,
     cosim = summarize(result)
     ref, ref_wall = monolithic_summary(scenario)
     if rtol is None:
-        rows = comparison_rows(cosim, ref, scenario.analysis)
+        rows = comparison_rows(cosim, ref, scenario.mechanism.figures)
         rows.append(("wall_time_s", round(result.wall_time, 3), round(ref_wall, 3), None))
         return rows
     loose, loose_wall = monolithic_summary(scenario, rtol)
     rows = []
-    for key, a, b, _ in comparison_rows(cosim, ref, scenario.analysis):
+    for key, a, b, _ in comparison_rows(cosim, ref, scenario.mechanism.figures):
         c = loose.get(key)
         numbers = all(isinstance(x, (int, float)) for x in (a, b, c))
         rows.append((key, a, c, b, a - b if numbers else None, c - b if numbers else None))

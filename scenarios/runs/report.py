@@ -12,7 +12,6 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sewfmu.scenarios import analyses
 from sewfmu.scenarios.files.outputs import write_atomic
 
 STYLE = """
@@ -235,7 +234,7 @@ def sweep_report(path: Path, scenario, rows: list[dict], swept: list[str],
     table = Section("Points")
     columns = ["index", *swept, "status"]
     columns += [k for k in rows[0] if k not in columns and k not in ("key", "error")]
-    units = {"stop_time": "s", "wall_time_s": "s", **analyses.figure_units(scenario.analysis, scenario.study)}
+    units = {"stop_time": "s", "wall_time_s": "s", **scenario.figure_units()}
     table.table([f"{c} [{units[c]}]" if units.get(c) and c not in swept else c
                  for c in columns] + ["error"],
                 [[r.get(c) for c in columns] + [r.get("error", "")] for r in rows],

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios import analyses
+from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import folder_for, replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
@@ -41,30 +41,30 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
     previous results as they were. `report` is a self-contained page with the plots, the
     animations and, for the punch drive, the comparison with the monolithic solution."""
     if animate or report:   # a run without pictures does not load the animations
-        from sewfmu.scenarios import animations
+        from sewfmu.scenarios.mechanisms import animation  # matplotlib, pillow: only for pictures
 
     summary = summary_of_runs(scenario, runs)
     if (plot or animate) and not scenario.analysis:        # asked for, and nothing to draw
         warnings.warn(f"{'--plot' if plot else '--animate'}: {scenario.name} has no analysis (no "
                       f"mechanism of sewfmu's named by `analysis`), so there is nothing to draw; "
                       f"results.csv holds every recorded series", stacklevel=2)
-    elif animate and not animations.can_animate(scenario):
+    elif animate and not animation.can_animate(scenario):
         warnings.warn(f"--animate: no animation draws {scenario.analysis}'s mechanism",
                       stacklevel=2)
     against_monolithic = {}
-    if report and scenario.analysis and analyses.mechanism(scenario.analysis).monolithic:
+    if report and scenario.mechanism and scenario.mechanism.monolithic:
         for label, result, own in runs:
             against_monolithic[label] = comparison_rows(own, monolithic_summary(result.scenario)[0],
-                                                       scenario.analysis)
+                                                       scenario.mechanism.figures)
     with replacing(out_dir) as staging:
         pictures = []
         for label, result, own in runs:
             where = folder_for(staging, label) if label else staging
             write_csv(result, where / "results.csv")
             write_json(own, where / "summary.json")
-            if (animate or report) and animations.can_animate(scenario):
+            if (animate or report) and animation.can_animate(scenario):
                 gif = where / f"{scenario.name}.gif"
-                if _drawn(lambda: animations.animate(result, gif), "the animation"):
+                if _drawn(lambda: animation.animate(result, gif), "the animation"):
                     pictures.append((f"the mechanism moving{', ' + label if label else ''} "
                                      f"(last revolution, recorded run)", gif))
         if scenario.compare:
@@ -73,7 +73,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
             curves = [(label or scenario.name, result) for label, result, _ in runs]
             png = staging / f"{scenario.name}.png"
             title = f"{scenario.description} ({as_run(scenario)})"
-            if _drawn(lambda: analyses.module(scenario.analysis).plot(curves, png, title),
+            if _drawn(lambda: scenario.mechanism.plot(curves, png, title),
                       "the plot"):
                 pictures.insert(0, ("key curves of the last revolution", png))
         if report:
@@ -98,7 +98,7 @@ def _drawn(draw, what: str) -> bool:
     warning line naming it, and the rest is written."""
     try:
         draw()
-    except analyses.MissingRecord as err:
+    except MissingRecord as err:
         warnings.warn(f"{what} is left out: {err}", stacklevel=2)
         return False
     return True

@@ -4,7 +4,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from sewfmu.scenarios import analyses
+from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult, run
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
@@ -19,11 +19,11 @@ def summarize(result: RunResult) -> dict:
     figures, units = {}, {}
     if sc.analysis:
         try:
-            figures = analyses.module(sc.analysis).summary_of_run(result)
-        except analyses.MissingRecord as err:    # a narrowed record: the series still count
+            figures = sc.mechanism.summary_of_run(result)
+        except MissingRecord as err:    # a narrowed record: the series still count
             warnings.warn(f"{sc.name}: the key figures are left out: {err}", stacklevel=2)
             figures = {}
-        declared = analyses.mechanism(sc.analysis).figures
+        declared = sc.mechanism.figures
         units = {key: declared[key] for key in figures if key in declared}
     # what the master did: the iterative master's passes, the adaptive master's steps
     master = {f"master_{k}": v for k, v in result.coupling.items()}

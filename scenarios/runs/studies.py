@@ -5,17 +5,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sewfmu.scenarios import analyses
+from sewfmu.scenarios.mechanisms.base import Study
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
 
-def study_of(scenario: Scenario) -> analyses.Study:
-    return analyses.mechanism(scenario.analysis).studies[scenario.study]
+def study_of(scenario: Scenario) -> Study:
+    return scenario.mechanism.studies[scenario.study]
 
 
-def given_of(scenario: Scenario, study: analyses.Study) -> dict[str, dict]:
+def given_of(scenario: Scenario, study: Study) -> dict[str, dict]:
     """The design the study is computed for: {role: the values the scenario gives its
     instance's parameters} (the FMU's defaults for the rest)."""
     return {role: dict(scenario.instances[scenario.roles[role]].parameters)

@@ -145,7 +145,7 @@ WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master
 
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
     """One co-simulation (in a worker): its key figures, or the error that stopped it."""
-    from sewfmu.scenarios.analyses import figures_of  # loaded on first use (start-up time)
+    from sewfmu.scenarios.mechanisms.base import figures_of  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_csv  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.runner import simulate, summarize  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.studies import study_summary  # loaded on first use (start-up time)
@@ -471,12 +471,9 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
                    report: bool = False) -> None:
     """The plot of every key figure against the swept parameters (SCENARIO_sweep.png) and, with
     report, report.html beside sweep.csv."""
-    from sewfmu.scenarios import analyses  # loaded on first use (start-up time)
-
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
-        figures = {f: unit for f, unit in analyses.figure_units(scenario.analysis,
-                                                                  scenario.study).items()
+        figures = {f: unit for f, unit in scenario.figure_units().items()
                    if f != "n_contacts"}
         plot_table(rows, swept, figures, picture, sweep_title(scenario, rows, swept),
                    {param: declared_unit(scenario, param) for param in swept})
