@@ -5,6 +5,7 @@ their wing. Errors become one line (`explain`)."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -14,6 +15,7 @@ from pathlib import Path
 
 from sewfmu import api, console
 from sewfmu._version import __version__
+from sewfmu.scenarios.cosim import watchdog
 from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_sigterm
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
@@ -46,13 +48,28 @@ def cmd_list(args) -> None:
 
 
 def cmd_run(args) -> None:
+    from sewfmu.scenarios.runs.results import keep_unfinished  # loaded on first use (start-up time)
+
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
+
+    def keep(result, reason: str) -> str:
+        """What a run that did not finish recorded, into OUT/interrupted/ (results.py)."""
+        return keep_unfinished(result, reason, out)
+
     try:
-        run = api.run(scenario, out=out, plot=args.plot, animate=args.animate,
-                      report=args.report, progress=True)
+        with watchdog.keeping(keep):          # a run the watchdog ends keeps its record too
+            run = api.run(scenario, out=out, plot=args.plot, animate=args.animate,
+                          report=args.report, progress=True)
     except api.InaccurateRun as err:
         console.print_run(scenario.name, err.run, out)
+        raise
+    except Interrupted as err:
+        if err.result is not None and err.kept is None:
+            try:
+                err.kept = keep(err.result, err.reason)
+            except (Exception, KeyboardInterrupt):    # unwritable, or interrupted again
+                pass
         raise
     console.print_run(scenario.name, run, out)
 
@@ -345,6 +362,8 @@ def main(argv=None) -> int:
     # from here a signal stops the command cleanly (the start-up's handlers: sewfmu/__main__.py)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     interrupt_on_sigterm()
+    # an FMU call that never returns: the watchdog ends this process with this command's line
+    watchdog.end_process_with(lambda err: _end_stuck(err, args.command))
     # a warning (an SSP input that nothing sets) is one line, as errors are
     warnings.showwarning = lambda message, *_, **__: print(f"sewfmu: warning: {message}",
                                                            file=sys.stderr)
@@ -352,13 +371,8 @@ def main(argv=None) -> int:
         args.func(args)
         sys.stdout.flush()
     except KeyboardInterrupt as err:
-        status = err.exit_status if isinstance(err, Interrupted) else 130
-        name = err.args[0] if isinstance(err, Interrupted) else "SIGINT"
-        kept = ("the points finished so far are kept: the same command resumes"
-                if args.command in ("sweep", "optimize", "sensitivity")
-                else "nothing of the interrupted run was written")
-        print(f"sewfmu: interrupted ({name}); {kept}", file=sys.stderr)
-        return status
+        print(_interrupted_line(err, args.command), file=sys.stderr)
+        return err.exit_status if isinstance(err, Interrupted) else 130
     except BrokenPipeError:
         # the reader went away (`sewfmu list | head -1`): stop quietly, as other tools do
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -368,7 +382,37 @@ def main(argv=None) -> int:
             raise
         print(f"sewfmu: error: {console.explain(err, args.command)}", file=sys.stderr)
         return 1
+    finally:
+        watchdog.end_process_with(None)     # main() called by a process that goes on
     return 0
+
+
+def _interrupted_line(err: KeyboardInterrupt, command: str) -> str:
+    """`sewfmu: interrupted (SIGINT) at t = 0.25 s; the record up to … is in …`: the signal, where
+    the run was, and what is kept."""
+    reason = err.reason if isinstance(err, Interrupted) else "interrupted (SIGINT)"
+    kept = getattr(err, "kept", None) or (
+        "the points finished so far are kept: the same command resumes"
+        if command in ("sweep", "optimize", "fit", "sensitivity")
+        else "nothing of the interrupted run was written")
+    return f"sewfmu: {reason}; {kept}"
+
+
+def _end_stuck(err: BaseException, command: str) -> None:
+    """The watchdog's way out of an FMU call that never returns (scenarios/cosim/watchdog.py):
+    the line this command says for `err` (an Interrupted, or a step beyond
+    experiment.step_timeout), then the process ends at once (the call cannot be unwound)."""
+    if getattr(sys.stderr, "isatty", lambda: False)():
+        sys.stderr.write("\r\033[K")            # over a progress line
+    if isinstance(err, Interrupted):
+        line, status = _interrupted_line(err, command), err.exit_status
+    else:
+        line, status = f"sewfmu: error: {console.explain(err, command)}", 1
+    sys.stderr.write(line + "\n")
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(status)
 
 
 # what a user sets to choose OpenBLAS's threads (numpy's and scipy's BLAS)

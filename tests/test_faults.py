@@ -283,7 +283,7 @@ def test_random_workers_killed_the_final_table_equals_an_undisturbed_run(tmp_pat
 # --- interruption --------------------------------------------------------------------------------
 @pytest.mark.parametrize("sig, delay", [(signal.SIGINT, 0.4), (signal.SIGINT, 1.5),
                                         (signal.SIGTERM, 1.5)])
-def test_an_interrupted_run_exits_as_interrupted_and_writes_nothing(tmp_path, sig, delay):
+def test_an_interrupted_run_exits_as_interrupted_and_keeps_only_its_record(tmp_path, sig, delay):
     out = tmp_path / "run"
     proc = _sewfmu("run", "punch_drive", "--set", "experiment.revolutions=400", "--out", str(out))
     time.sleep(delay)
@@ -292,8 +292,15 @@ def test_an_interrupted_run_exits_as_interrupted_and_writes_nothing(tmp_path, si
     assert proc.returncode == 128 + sig, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "interrupted" in lines[0] and "failed" not in err, err
-    assert not out.exists()
-    assert os.listdir(tmp_path) == []                        # no temporaries either
+    # what it recorded, in OUT/interrupted/, or nothing at all before its first record; no
+    # temporaries either
+    written = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
+    if "nothing of the interrupted run was written" in lines[0]:
+        assert written == [], written
+    else:
+        assert written == ["run", "run/interrupted", "run/interrupted/.sewfmu-outputs",
+                           "run/interrupted/results.csv", "run/interrupted/summary.json"]
+        assert f"is in {out / 'interrupted' / 'results.csv'}" in lines[0]
 
 
 def test_an_interrupted_run_leaves_the_previous_results_as_they_were(tmp_path):
@@ -305,8 +312,12 @@ def test_an_interrupted_run_leaves_the_previous_results_as_they_were(tmp_path):
     proc.send_signal(signal.SIGINT)
     proc.communicate(timeout=30)
     assert proc.returncode == 130
-    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # its own record goes beside them, into interrupted/, and leaves them as they were
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
     assert sorted(os.listdir(tmp_path)) == ["run"]
+    # the next run that finishes removes that record
+    assert main(["run", "punch_drive", "--set", "experiment.revolutions=1", "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(before)
 
 
 # --- outputs -------------------------------------------------------------------------------------

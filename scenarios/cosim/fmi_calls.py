@@ -59,6 +59,11 @@ class CosimError(Error, RuntimeError):
     """An FMU failed during the run; the message names the instance, the time and its log."""
 
 
+class StepTimeout(CosimError):
+    """A communication step ran longer than experiment.step_timeout (cosim/watchdog.py): the
+    message names the instance, the FMI call, the time and the limit."""
+
+
 def failed(status: int) -> bool:
     """Whether a status stops the run: worse than Warning."""
     return status > WARNING_LEVEL

@@ -6,6 +6,9 @@ FMU's doStep; pythonfmu answers it with fmi2Fatal and the run would end as "shaf
 step". Within `deferred()` the signals only mark the interruption; the master raises it between
 communication steps (`raise_pending`), where no FMU code runs and every instance can still be
 freed. Outside of it (reading, writing, plotting) the CLI lets SIGTERM interrupt like Ctrl-C.
+A call that never returns would keep the interruption waiting for ever: cosim/watchdog.py ends
+the run then. A signal the process ignores (a sweep's workers ignore Ctrl-C: their main process
+decides) stays ignored.
 """
 from __future__ import annotations
 
@@ -19,15 +22,27 @@ pending: list[int] = []         # signals received within deferred(), oldest fir
 
 
 class Interrupted(KeyboardInterrupt):
-    """The run was interrupted by a signal; exit status 128 + the signal's number."""
+    """The run was interrupted by a signal; exit status 128 + the signal's number.
 
-    def __init__(self, signum: int = signal.SIGINT):
+    `where` says where the run was ("at t = 0.25 s", "while motor was in doStep at t = 0.25 s"),
+    `result` is what it had recorded (a RunResult, or None before its first record) and `kept`
+    where a front door wrote that record ("the record up to t = … s is in …")."""
+
+    def __init__(self, signum: int = signal.SIGINT, where: str = ""):
         super().__init__(signal.Signals(signum).name)
         self.signum = signum
+        self.where = where
+        self.result = None
+        self.kept: str | None = None
 
     @property
     def exit_status(self) -> int:
         return 128 + self.signum
+
+    @property
+    def reason(self) -> str:
+        """What happened, as a line says it: `interrupted (SIGINT) at t = 0.25 s`."""
+        return f"interrupted ({self.args[0]}){' ' + self.where if self.where else ''}"
 
 
 def raise_pending() -> None:
@@ -61,7 +76,8 @@ def deferred():
         return
     previous = {s: signal.getsignal(s) for s in SIGNALS}
     for s in SIGNALS:
-        signal.signal(s, _mark)
+        if previous[s] is not signal.SIG_IGN:      # an ignored signal stays ignored
+            signal.signal(s, _mark)
     try:
         yield
     finally:

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sewfmu.scenarios.cosim import interrupt
+from sewfmu.scenarios.cosim import interrupt, watchdog
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.divergence import DivergenceWatch
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError, LogCollector, reason
@@ -104,12 +104,20 @@ class Master:
         an FMU."""
         started = clock.perf_counter()
         every = self.PROGRESS_EVERY
-        with interrupt.deferred(), self:
-            while not self.finished():
-                self.steps(every - self.k % every)        # up to the next report
-                if progress is not None and (self.k % every == 0 or self.finished()):
-                    progress(*self.progress_point())
-            result = self.result()
+        try:
+            # a call that never returns is the watchdog's (cosim/watchdog.py)
+            with interrupt.deferred(), watchdog.watching(self), self:
+                while not self.finished():
+                    self.steps(every - self.k % every)        # up to the next report
+                    if progress is not None and (self.k % every == 0 or self.finished()):
+                        progress(*self.progress_point())
+                result = self.result()
+        except interrupt.Interrupted as err:
+            if err.result is None and not err.where:        # where it stopped, what it kept
+                opened = self.recorder is not None
+                err.where = f"at t = {self.t:g} s" if opened else "while loading the FMUs"
+                err.result = self.result() if opened and self.recorder.length else None
+            raise
         result.wall_time = clock.perf_counter() - started
         return result
 
@@ -178,6 +186,8 @@ class Master:
             system.plan_records()
             self._phase = "initialization"
             for inst in system.instances:
+                # a signal while the FMUs load stops the run between two of them
+                interrupt.raise_pending()
                 inst.may_roll_back = algorithm.rolls_back
                 self._initialize(inst)
             # around a loop the first instance initialized took its partners' outputs before

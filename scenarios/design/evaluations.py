@@ -40,7 +40,13 @@ from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
-from sewfmu.scenarios.runs.workers import WorkerDied, _answer, _Worker, forkserver_context
+from sewfmu.scenarios.runs.workers import (
+    WorkerDied,
+    _answer,
+    _Worker,
+    forkserver_context,
+    stop_all,
+)
 
 OK, INFEASIBLE, FAILED = "ok", "infeasible", "failed"
 LOG_FILE = "evaluations.csv"
@@ -235,8 +241,7 @@ class WorkerPool:
             raise
 
     def close(self) -> None:
-        for worker in self.workers:
-            worker.stop()
+        stop_all(self.workers)          # all at once: each may be stuck in an FMU call
         self.workers = []
 
 

@@ -17,6 +17,9 @@ class ExperimentKey:
     example: str            # a TOML value
     unit: str = ""          # a value may be given with a unit convertible to this one
     in_ssp: bool = False    # carried by sewfmu's SSP annotation (SSP 1.0 has no place for it)
+    # decides the results (a sweep point's identity holds it); a key that only says how a run
+    # is watched does not
+    decides_results: bool = True
 
 
 EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
@@ -47,12 +50,20 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
                   "less)", "0.05", '0.01, or "off"', in_ssp=True),
     ExperimentKey("accept_error", "true: a run beyond its accuracy succeeds all the same (its "
                   "estimate is still reported)", "false", "true", in_ssp=True),
+    ExperimentKey("step_timeout", "the longest a communication step may take, in seconds of "
+                  "wall time: a step still running after it (an FMU call that does not return) "
+                  "stops the run with the instance, the FMI call and the time, and the record "
+                  "so far is kept; \"off\": no limit", "none (off)", '30, or "2 min"', "s",
+                  decides_results=False),
 )}
 
 
 def experiment_of(scenario) -> dict:
-    """Every experiment key's value in this scenario (None where not given)."""
-    return {name: getattr(scenario, name) for name in EXPERIMENT_KEYS}
+    """The value in this scenario (None where not given) of every experiment key that decides
+    the results: what a run's provenance and a sweep point's identity hold (a limit on the wall
+    time, which only stops a run, changes neither)."""
+    return {name: getattr(scenario, name) for name, key in EXPERIMENT_KEYS.items()
+            if key.decides_results}
 
 
 def ssp_settings(scenario, step: float) -> dict:

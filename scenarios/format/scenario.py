@@ -62,6 +62,7 @@ class Scenario:
     accuracy: float | str = 0.05      # the relative coupling error its key figures may carry;
                                       # "off": not estimated
     accept_error: bool = False        # a run beyond its accuracy succeeds all the same
+    step_timeout: float | None = None     # s of wall time a communication step may take
     digest: str = ""                  # sha256 of the scenario file's text, as read
     # FMU type -> file, for a system read from SSP (scenarios/format/ssp_import.py): its own FMUs
     fmu_files: dict[str, Path] = field(default_factory=dict)
@@ -248,6 +249,11 @@ class Scenario:
             # figures are not read)
             self.accuracy = "off" if value == "off" else \
                 positive(value, f"{origin} experiment.accuracy (a positive number, or \"off\")")
+            return
+        if key == "step_timeout":
+            # "off": no limit (a file's limit lifted with --set)
+            self.step_timeout = None if value == "off" else positive_in(
+                value, "s", f"{origin} experiment.step_timeout")
             return
         if key == "accept_error":
             if not isinstance(value, bool):

@@ -1,8 +1,15 @@
 """A run's files (and a study's): results.csv (a column per recorded output, its unit in the header),
 summary.json, and as asked the plots, animations and report.html, written into the output folder
-in one piece (files.outputs.replacing); run_scenario runs and writes (a study: runs/studies.py)."""
+in one piece (files.outputs.replacing); run_scenario runs and writes (a study: runs/studies.py).
+
+A run that did not finish (interrupted, or a step beyond experiment.step_timeout) keeps what it
+recorded in OUT/interrupted/ (`keep_unfinished`: results.csv with every row recorded,
+summary.json saying why and where it stopped), written whole with a manifest of its own, beside
+the previous run's files, which stay as they were; the next run into OUT that finishes removes it.
+"""
 from __future__ import annotations
 
+import contextlib
 import json
 import warnings
 from pathlib import Path
@@ -11,7 +18,7 @@ import numpy as np
 
 from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult
-from sewfmu.scenarios.files.outputs import folder_for, replacing, write_atomic
+from sewfmu.scenarios.files.outputs import MANIFEST, folder_for, replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.compare import comparison_rows, monolithic_summary
 from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
@@ -79,6 +86,35 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
         if report:
             from sewfmu.scenarios.runs.report import run_report  # only with --report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
+    forget_unfinished(out_dir)         # an earlier run's that did not finish: this one did
+
+
+UNFINISHED = "interrupted"      # the folder in OUT of the record of a run that did not finish
+
+
+def keep_unfinished(result: RunResult, reason: str, out_dir: Path) -> str:
+    """Write the record of a run that did not finish into OUT/interrupted/; where it is, as a
+    line says it."""
+    folder = Path(out_dir) / UNFINISHED
+    with replacing(folder) as staging:
+        write_csv(result, staging / "results.csv")
+        write_json({"scenario": result.scenario.name, "unfinished": reason,
+                    "recorded_until": float(result.time[-1]), "rows": len(result.time),
+                    "units": {"recorded_until": "s"}}, staging / "summary.json")
+    return f"the record up to t = {result.time[-1]:g} s is in {folder / 'results.csv'}"
+
+
+def forget_unfinished(out_dir: Path) -> None:
+    """Remove the record of an earlier unfinished run from OUT: the files its manifest lists
+    (a folder of that name without one is the user's, and stays)."""
+    folder = Path(out_dir) / UNFINISHED
+    if not (folder / MANIFEST).is_file():
+        return
+    with replacing(folder):           # nothing staged: what the manifest lists goes
+        pass
+    with contextlib.suppress(OSError):
+        (folder / MANIFEST).unlink()
+        folder.rmdir()                # only if nothing else is in it
 
 
 def as_run(scenario: Scenario) -> str:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from sewfmu.scenarios.cosim import watchdog
+from sewfmu.scenarios.cosim.interrupt import Interrupted
 from sewfmu.scenarios.cosim.master import RunResult, run
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
@@ -37,7 +39,14 @@ def run_variants(scenario: Scenario, fmu_dir: Path | None = None,
             (lambda done, total, label=label: progress(label, done, total))
         result = run(sc, paths, report_steps)
         summary = summarize(result)
-        found = accuracy.estimate(sc, summary, fmu_dir)
+        # interrupted now, the run finished is what is kept, not the estimate's coarser one
+        after = "while estimating the coupling error, after the run"
+        try:
+            with watchdog.keeping_instead(result, after):
+                found = accuracy.estimate(sc, summary, fmu_dir)
+        except Interrupted as err:
+            err.result, err.where = result, after
+            raise
         if found is not None:
             summary["coupling_error"] = found
         runs.append((label, result, {**summary, "provenance": provenance(sc, paths)}))

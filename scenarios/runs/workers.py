@@ -9,7 +9,10 @@ A worker ends with the main process however that ends: on Linux the kernel kills
 parent (the forkserver, which itself exits when the main process is gone) dies, and a watchdog
 thread in every worker checks that the main process still exists, for a kill -9 or a crash.
 Workers ignore Ctrl-C: the terminal sends it to the whole process group, and the main process
-decides what an interruption stops (it terminates the workers).
+decides what an interruption stops (it terminates the workers, all at once: one stuck in an FMU
+call ends by its watchdog, scenarios/cosim/watchdog.py, or is killed a second later). A point
+whose step runs beyond experiment.step_timeout ends its worker too: the point fails with the
+watchdog's line, and a fresh worker takes the next.
 """
 from __future__ import annotations
 
@@ -22,11 +25,16 @@ import sys
 import threading
 import time
 from collections import deque
+from functools import partial
 from multiprocessing.connection import wait
 from typing import Callable, Iterable, Iterator
 
+from sewfmu.scenarios.cosim import watchdog
+from sewfmu.scenarios.cosim.interrupt import Interrupted
+
 _PR_SET_PDEATHSIG = 1
 WATCHDOG_PERIOD = 0.5      # s between the worker's checks that the main process is alive
+STOP_WAIT = 1.0            # s the workers have to end after SIGTERM before SIGKILL
 
 
 class WorkerDied(RuntimeError):
@@ -77,6 +85,7 @@ def _serve(conn, main_pid: int) -> None:
     """A worker's life: run tasks from the pipe until told to stop or the pipe closes."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _end_with(main_pid)
+    watchdog.end_process_with(partial(_end_stuck, conn))
     while True:
         try:
             task = conn.recv()
@@ -92,6 +101,16 @@ def _serve(conn, main_pid: int) -> None:
         except KeyboardInterrupt:         # SIGTERM from the main process (see interrupt.py)
             return
         conn.send(answer)
+
+
+def _end_stuck(conn, err: BaseException) -> None:
+    """The watchdog's way out of a point stuck in an FMU call: a step beyond step_timeout is the
+    point's failure, told to the main process (which takes a fresh worker); an interruption is
+    the main process ending this worker, and told nothing. The worker ends at once."""
+    if not isinstance(err, Interrupted):
+        with contextlib.suppress(Exception):
+            conn.send(("died", " ".join(str(err).split())))
+    os._exit(err.exit_status if isinstance(err, Interrupted) else 1)
 
 
 def describe_exit(exitcode: int | None) -> str:
@@ -135,15 +154,25 @@ class _Worker:
         self.task = task
         self.conn.send((task[1], task[2]))
 
-    def stop(self, timeout: float = 2.0) -> None:
+    def stop(self) -> None:
+        stop_all([self])
+
+
+def stop_all(workers: list[_Worker], wait_for: float = STOP_WAIT) -> None:
+    """End the workers: SIGTERM to all at once, SIGKILL to those still alive `wait_for` seconds
+    later (one in an FMU call that never returns), so that they all end within that time."""
+    for worker in workers:
         with contextlib.suppress(OSError, ValueError):
-            self.conn.close()
-        if self.process.is_alive():
-            self.process.terminate()
-            self.process.join(timeout)
-        if self.process.is_alive():
-            self.process.kill()
-            self.process.join(timeout)
+            worker.conn.close()
+        if worker.process.is_alive():
+            worker.process.terminate()
+    deadline = time.monotonic() + wait_for
+    for worker in workers:
+        worker.process.join(max(0.0, deadline - time.monotonic()))
+    for worker in workers:
+        if worker.process.is_alive():
+            worker.process.kill()
+            worker.process.join(wait_for)
 
 
 def run_tasks(tasks: Iterable[tuple[object, Callable, tuple]], workers: int,
@@ -181,8 +210,7 @@ def run_tasks(tasks: Iterable[tuple[object, Callable, tuple]], workers: int,
                     worker.give(queue.popleft())
                 yield key, answer
     finally:
-        for worker in pool:
-            worker.stop()
+        stop_all(pool)
 
 
 def _answer(worker: _Worker):
@@ -191,6 +219,8 @@ def _answer(worker: _Worker):
     try:
         if worker.conn.poll():
             status, value = worker.conn.recv()
+            if status == "died":                  # its watchdog's line: the worker is ending
+                return WorkerDied(value)
             return value if status == "ok" else RuntimeError(value)
     except (EOFError, OSError):
         alive = False                         # the pipe broke: the process is gone

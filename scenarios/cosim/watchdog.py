@@ -1,0 +1,292 @@
+"""The way out of an FMU call that never returns.
+
+A call into an FMU holds the main thread until it returns, and Python runs its signal handlers
+in the main thread only, between two bytecodes: a doStep that never returns (a C library in a
+loop, a Python FMU asleep or spinning) would keep Ctrl-C and SIGTERM, which interrupt.py defers
+to the next step, waiting for ever. While a run is under way in the main thread (`watching`), a
+thread here learns of every signal from the file descriptor Python's C-level handler writes to
+(signal.set_wakeup_fd), gives the main thread GRACE seconds to reach its check between two steps,
+and otherwise ends the run itself: it names the instance and the FMI call the main thread is in
+(read from the main thread's Python stack when it is needed: nothing is noted per step), has the
+record so far kept (by the writer a front door gave `keeping`), and ends the process through the
+hook of the process's owner (`end_process_with`: the command line, a sweep's worker), since a
+call that never returns cannot be unwound. experiment.step_timeout is watched by the same thread,
+which then samples the run's step counter (only then: the thread otherwise only waits).
+
+In a process that is not sewfmu's own (the API in a script or a notebook) the thread does not end
+the process at the first signal: it says where the run is stuck and that a second signal ends the
+process.
+"""
+from __future__ import annotations
+
+import contextlib
+import linecache
+import os
+import select
+import signal
+import sys
+import threading
+import time
+
+# nothing heavy (no fmpy): the command line imports this module before it knows its command
+from sewfmu.scenarios.cosim.interrupt import Interrupted
+
+GRACE = 0.5        # s the main thread has to reach its check between two steps after a signal
+
+
+# the run under way in the main thread and what ends it; _lock guards the fields, _ending is
+# held by whoever ends a run (the main thread leaving `watching`, or the watchdog)
+_lock = threading.Lock()
+_ending = threading.Lock()
+_left = threading.Event()     # the run under watch has left `watching`
+_run = None                   # the Master under way
+_timeout: float | None = None
+_writer = None                # writer(result, reason) -> "the record up to t = … s is in …"
+_instead = None               # (RunResult, where): the record to keep instead of the run's own
+_end = None                   # end(err) -> never returns: the process owner's way out
+_pipe: tuple[int, int] | None = None
+_pid = None                   # the process the pipe and the thread belong to (not a fork's)
+
+
+def end_process_with(end) -> None:
+    """This process is sewfmu's own: `end(err)` prints what the owner prints for the Interrupted
+    or StepTimeout `err` and ends the process (os._exit). (A hook that returns leaves the run to
+    the main thread: what a test of the watchdog does. None: the process is not sewfmu's.)"""
+    global _end
+    _end = end
+
+
+@contextlib.contextmanager
+def keeping(writer):
+    """Within the block, a run ended by the watchdog has its record kept by
+    `writer(result, reason)`, which returns where it is (`the record up to t = … s is in …`)."""
+    global _writer
+    previous, _writer = _writer, writer
+    try:
+        yield
+    finally:
+        _writer = previous
+
+
+@contextlib.contextmanager
+def keeping_instead(result, where: str):
+    """Within the block, an ended run keeps `result` (a finished run whose estimate runs now)
+    instead of its own record, and says it was `where`."""
+    global _instead
+    previous, _instead = _instead, (result, where)
+    try:
+        yield
+    finally:
+        _instead = previous
+
+
+@contextlib.contextmanager
+def watching(master):
+    """The run `master` is under way in this thread: a signal it does not answer within GRACE,
+    or a step beyond its experiment.step_timeout, ends it. Only the main thread is watched (the
+    only one that signals reach)."""
+    global _run, _timeout
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _start()
+    # the byte Python's C-level handler writes here wakes the watchdog, wherever the main
+    # thread is (it needs no byte of its own: interrupt.pending holds the signal)
+    previous = signal.set_wakeup_fd(_pipe[1], warn_on_full_buffer=False)
+    with _lock:
+        _run, _timeout = master, getattr(master.scenario, "step_timeout", None)
+        _left.clear()
+    _poke()
+    try:
+        yield
+    finally:
+        with _ending:           # a run being ended by the watchdog: the process ends with it
+            with _lock:
+                _run, _timeout = None, None
+                _left.set()
+        signal.set_wakeup_fd(previous)
+        _poke()
+
+
+def _start() -> None:
+    """The pipe and the thread, once per process (a forked child starts its own)."""
+    global _pipe, _pid
+    if _pid == os.getpid():
+        return
+    read, write = os.pipe()
+    os.set_blocking(write, False)              # set_wakeup_fd's rule
+    _pipe, _pid = (read, write), os.getpid()
+    threading.Thread(target=_watch, args=(read,), name="sewfmu-watchdog", daemon=True).start()
+
+
+def _poke() -> None:
+    """Wake the thread to read the run's settings again (a zero byte: no signal)."""
+    with contextlib.suppress(OSError):
+        os.write(_pipe[1], b"\0")
+
+
+def _watch(read: int) -> None:
+    seen, since, warned = None, 0.0, None
+    while True:
+        limit = _timeout
+        period = None if limit is None else min(0.1, max(0.005, limit / 10))
+        ready, _, _ = select.select([read], [], [], period)
+        signals = [b for b in os.read(read, 512) if b in _SIGNALS] if ready else []
+        run = _run
+        if run is None:
+            seen = warned = None
+            continue
+        try:
+            if signals:
+                if warned is run:                   # a second signal to a stuck run: now
+                    _finish(run, Interrupted(signals[-1]))
+                elif not _left.wait(GRACE):
+                    warned = _stuck(run, Interrupted(signals[-1]))
+            if limit is None or getattr(run, "_phase", "") != "step":
+                seen = None
+                continue
+            now = time.monotonic()
+            if seen != (run, run.k):
+                seen, since = (run, run.k), now
+            elif now - since > limit and warned is not run:
+                warned = _stuck(run, None, limit)
+        except Exception:          # the watchdog outlives a failure of its own: the next run
+            seen = None
+
+
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+def _stuck(run, err: Interrupted | None, limit: float | None = None):
+    """The main thread has not answered the signal `err` (or its step has run beyond `limit`):
+    end the run; in a process that is not sewfmu's own, say where it is stuck instead and return
+    the run, which the next signal ends."""
+    if _end is not None:
+        _finish(run, err, limit)
+        return None
+    with _lock:
+        if _run is not run:
+            return None
+    said = _interrupted(run, err).reason if err is not None else _overdue(run, limit)
+    how = signal.Signals(err.signum).name if err is not None else "Ctrl-C"
+    sys.stderr.write(f"sewfmu: {said}: the call does not return, and sewfmu ends only its own "
+                     f"processes; a{'nother' if err is not None else ''} {how} ends this "
+                     f"one\n")
+    sys.stderr.flush()
+    return run
+
+
+def _overdue(run, limit: float) -> str:
+    """What a step beyond experiment.step_timeout is, as the line says it."""
+    inst, call = stuck_call()
+    if inst is None:
+        return (f"the step from t = {run.t:g} s took longer than experiment.step_timeout = "
+                f"{limit:g} s")
+    return f"{inst} took longer than experiment.step_timeout = {limit:g} s in {call} at " \
+           f"t = {run.t:g} s"
+
+
+def _finish(run, err: Interrupted | None, limit: float | None = None) -> None:
+    """End the run stuck in the main thread: its record kept, the owner's line, the process
+    ended (never returns). Nothing happens if the main thread has left the run meanwhile."""
+    with _ending:
+        if _run is not run:
+            return
+        if err is not None:
+            _interrupted(run, err)
+            result, reason = err.result, err.reason
+        else:
+            result, reason = _record_of(run), _overdue(run, limit)
+        kept = None
+        if result is not None and _writer is not None:
+            with contextlib.suppress(Exception):        # the line is said whatever happens
+                kept = _writer(result, reason)
+        if err is None:
+            from sewfmu.scenarios.cosim.fmi_calls import StepTimeout  # loaded with the run
+            err = StepTimeout(f"{reason}; {kept}" if kept else reason)
+        else:
+            err.kept = kept
+        try:
+            (_end or _default_end)(err)     # ends the process (a hook that returns: a test's)
+        except Exception:
+            _default_end(err)               # the owner's hook failed: the process ends all the same
+
+
+def _interrupted(run, err: Interrupted) -> Interrupted:
+    """err with where the run is and what it recorded."""
+    if _instead is not None:
+        err.result, err.where = _instead
+        return err
+    inst, call = stuck_call()
+    phase = getattr(run, "_phase", "loading")
+    if phase == "loading" or run.recorder is None:
+        err.where = f"while {inst} was in {call}" if inst else "while loading the FMUs"
+    else:
+        err.where = f"while {inst} was in {call} at t = {run.t:g} s" if inst else \
+            f"at t = {run.t:g} s"
+    err.result = _record_of(run)
+    return err
+
+
+def _record_of(run):
+    """The run's record so far (None before its first record)."""
+    if _instead is not None:
+        return _instead[0]
+    if getattr(run, "recorder", None) is None or not run.recorder.length:
+        return None
+    try:
+        return run.result()
+    except Exception:                  # a record that cannot be read is not kept
+        return None
+
+
+def _default_end(err) -> None:
+    """The end of a process that is not sewfmu's own, at the user's second signal."""
+    line = err.reason + (f"; {err.kept}" if err.kept else "") if isinstance(err, Interrupted) \
+        else f"error: {err}"
+    sys.stderr.write(f"sewfmu: {line}\n")
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(err.exit_status if isinstance(err, Interrupted) else 1)
+
+
+# the FMI call an Instance method makes, by the words of its source line (a method that makes
+# several) or by its name
+_WORDS = (("_step(", "doStep"), ("_set_reals", "set inputs"), ("_get_reals", "get outputs"),
+          ("_get_booleans", "get Boolean outputs"), ("terminate", "terminate"),
+          ("free", "freeInstance"))
+_NAMES = {"_do_step": "doStep", "do_step": "doStep", "instantiate": "instantiate",
+          "_instantiate": "instantiate", "get_state": "getFMUState",
+          "set_state": "setFMUState", "free_state": "freeFMUState", "set_inputs": "set inputs",
+          "pull_changed_inputs": "set inputs", "_set_reals": "set inputs",
+          "_get_reals": "get outputs", "_get_booleans": "get Boolean outputs",
+          "enter_initialization": "enterInitializationMode",
+          "exit_initialization": "exitInitializationMode", "set_parameter": "set a parameter",
+          "release": "terminate"}
+
+
+def stuck_call(thread: threading.Thread | None = None) -> tuple[str | None, str | None]:
+    """(instance name, FMI call) the thread (the main thread) is in now, from its Python stack:
+    the innermost frame of an Instance's method (an FMU's own Python code runs above it); (None,
+    None) where it is in no FMU call."""
+    # loaded with the first run (an FMU call needs it), never by this module: see its imports
+    instances = sys.modules.get("sewfmu.scenarios.cosim.instances")
+    if instances is None:
+        return None, None
+    ident = (thread or threading.main_thread()).ident
+    frame = sys._current_frames().get(ident)
+    while frame is not None:
+        inst = frame.f_locals.get("self")
+        if isinstance(inst, instances.Instance):
+            name = frame.f_code.co_name
+            if name == "_call":
+                return inst.name, str(frame.f_locals.get("what", "an FMI call"))
+            if name in ("exchange", "release"):
+                line = linecache.getline(frame.f_code.co_filename, frame.f_lineno)
+                call = next((c for word, c in _WORDS if word in line), None)
+                if call:
+                    return inst.name, call
+            return inst.name, _NAMES.get(name, name)
+        frame = frame.f_back
+    return None, None
