@@ -14,11 +14,18 @@ import types
 
 
 def app(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser: bool = False,
-        scheduler: str | None = None, workers: int | None = None) -> None:
+        scheduler: str | None = None, workers: int | None = None, allow_hosts=(),
+        max_request_mb: float = 4.0) -> None:
     """Serve the page until Ctrl-C or SIGTERM: the catalogue's scenarios and the files named in
     `scenarios`; only on 127.0.0.1 unless `host` says otherwise. Sweeps run on `workers` local
-    processes or on the Dask `scheduler`."""
+    processes or on the Dask `scheduler`. It answers only requests that name it by a loopback
+    name, `host`, or one of `allow_hosts` (NAME or NAME:PORT), and reads bodies of at most
+    `max_request_mb` MiB (docs/app.md, Security)."""
+    from sewfmu.app.guard import check_hosts  # standard library only: no extra needed
+
     check_port(port)
+    allow_hosts = check_hosts(host, allow_hosts)
+    max_request_mb = check_size(max_request_mb)
     try:
         from sewfmu.app.serve import serve  # optional extra (app): dash, plotly
     except ModuleNotFoundError as err:
@@ -28,7 +35,8 @@ def app(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser: b
             raise MissingApp(f"`sewfmu app` needs the optional package {err.name}: "
                              f"{install_command('app')}", name=err.name) from None
         raise
-    serve(list(scenarios), port, host, open_browser, scheduler, workers)
+    serve(list(scenarios), port, host, open_browser, scheduler, workers,
+          allow_hosts=allow_hosts, max_request_mb=max_request_mb)
 
 
 def check_port(port) -> int:
@@ -38,6 +46,16 @@ def check_port(port) -> int:
         raise sewfmu.ScenarioError(f"port: expected a whole number from 1 to 65535, got "
                                    f"{port!r}")
     return port
+
+
+def check_size(megabytes) -> float:
+    import sewfmu  # the error family (the package is loaded already)
+
+    if isinstance(megabytes, bool) or not isinstance(megabytes, (int, float)) or \
+            not 0 < megabytes <= 1024:
+        raise sewfmu.ScenarioError(f"--max-request-mb: expected a number of MiB above 0, at "
+                                   f"most 1024, got {megabytes!r}")
+    return float(megabytes)
 
 
 class MissingApp(ModuleNotFoundError):

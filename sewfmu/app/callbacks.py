@@ -4,7 +4,9 @@ draw the runs, move the mechanism, run a sweep. Every callback reads the jobs of
 holds (dcc.Store, in the tab); nothing is kept per page on the server."""
 from __future__ import annotations
 
+import sys
 import time
+import traceback
 from urllib.parse import unquote
 
 import dash
@@ -15,7 +17,7 @@ import sewfmu
 from sewfmu.app.drawing import mechanism_figure, series_figure, sweep_figure
 from sewfmu.app.files import present
 from sewfmu.app.layout import FRAME_DEG, POLL_MS, figures, runs_table, value_inputs
-from sewfmu.app.values import value_of
+from sewfmu.app.values import checked, readable, value_of
 
 NOT = dash.no_update
 MAX_POINTS = 400          # a sweep's points from the page (a larger one: `sewfmu sweep`)
@@ -62,11 +64,10 @@ def register(app, page) -> None:
             if page.jobs.get(job_id) is not None and page.jobs.get(job_id).status == "running":
                 return (NOT, NOT, NOT, NOT, "a run is going: wait for it, or Cancel it", NOT,
                         *unshown)
-            if label not in page.choices:
+            if not isinstance(label, str) or label not in page.choices:
                 return NOT, NOT, NOT, NOT, "choose a scenario", NOT, *unshown
-            typed = {i["name"]: t for i, t in zip(ids, texts)}
             try:
-                changed = page.check(label, typed, defaults or {})
+                changed = page.check(label, _typed(ids, texts), defaults)
                 new = page.jobs.start("run", page.request(label, changed))
             except sewfmu.Error as err:
                 return None, True, 0, "", _one_line(err), NOT, *unshown
@@ -140,9 +141,8 @@ def register(app, page) -> None:
         if which == "sweep-run":
             if page.jobs.get(job_id) is not None and page.jobs.get(job_id).status == "running":
                 return NOT, NOT, NOT, NOT, "a sweep is going: wait for it, or Cancel it", NOT
-            typed = {i["name"]: t for i, t in zip(ids, texts)}
             try:
-                changed = page.check(label, typed, defaults or {})
+                changed = page.check(label, _typed(ids, texts), defaults)
                 grid = {p1: _range(page, label, p1, lo1, hi1, n1)} if p1 else {}
                 if not grid:
                     raise sewfmu.ScenarioError("sweep: choose a parameter to sweep")
@@ -207,7 +207,7 @@ def _shown_runs(page, runs: list, chosen: list | None, ticked: list | None) -> t
 def values_of_choice(page, label: str) -> tuple:
     """A scenario's inputs, their texts as it has them, its description, and the values a
     sweep can take (the numbers)."""
-    if label not in page.choices:
+    if not isinstance(label, str) or label not in page.choices:
         return [], {}, "", [], []
     source = page.choices[label]
     cells, defaults = value_inputs(source)
@@ -228,10 +228,24 @@ def _default_series(names: list[str]) -> list[str]:
     return (known or rest or names)[:2]
 
 
-def _range(page, label: str, name: str, lo, hi, n) -> list[float]:
-    """A sweep's values: n numbers from lo to hi, each end checked as a typed value is."""
+def _typed(ids, texts) -> dict:
+    """{name: text} of the value inputs, from what the page sent (a request not from the page
+    may send anything: one line, not a 500)."""
     try:
-        a, b, count = float(lo), float(hi), int(str(n).strip())
+        return {str(i["name"]): t for i, t in zip(ids, texts)}
+    except (KeyError, TypeError):
+        raise sewfmu.ScenarioError("the values sent are not the page's inputs: reload the "
+                                   "page") from None
+
+
+def _range(page, label: str, name, lo, hi, n) -> list[float]:
+    """A sweep's values: n numbers from lo to hi, each end checked as a typed value is."""
+    if not isinstance(name, str):
+        raise sewfmu.ScenarioError(f"sweep: choose a parameter to sweep, got {name!r:.80}")
+    lo, hi, n = (readable(f"sweep {name} {end}", text)
+                 for end, text in (("from", lo), ("to", hi), ("points", n)))
+    try:
+        a, b, count = float(lo), float(hi), int(n)
     except (TypeError, ValueError):
         raise sewfmu.ScenarioError(f"sweep {name}: from and to are numbers in its declared "
                                    f"unit, points a whole number, got {lo!r}, {hi!r}, "
@@ -239,8 +253,19 @@ def _range(page, label: str, name: str, lo, hi, n) -> list[float]:
     if not 1 <= count <= 200:
         raise sewfmu.ScenarioError(f"sweep {name}: points from 1 to 200, got {count}")
     for end in (a, b):
-        sewfmu.load(page.choices[label], set={name: end})
+        checked(sewfmu.load, page.choices[label], {name: end})
     return [float(v) for v in np.linspace(a, b, count)]
+
+
+def failed(err: Exception) -> None:
+    """Dash's on_error: a callback that raised (a bug in sewfmu: a value the page cannot read
+    is refused with its one line before this) says so in its panel's alert, its traceback on the
+    server's terminal, rather than answering 500 and leaving the page as it was."""
+    traceback.print_exception(err, file=sys.stderr)
+    which = ctx.triggered_id if isinstance(ctx.triggered_id, str) else ""
+    alert = "sweep-alert" if which.startswith("sweep") else "alert"
+    dash.set_props(alert, {"children": _one_line(f"the page failed ({type(err).__name__}: "
+                                                 f"{err}): a bug in sewfmu")})
 
 
 def _one_line(err: Exception, most: int = 400) -> str:

@@ -15,6 +15,11 @@ def add_command(sub) -> None:
     p.add_argument("--port", type=_port, default=8050, help="the port (default 8050)")
     p.add_argument("--host", default="127.0.0.1",
                    help="the address to serve on (default 127.0.0.1: this machine only)")
+    p.add_argument("--allow-host", action="append", default=[], metavar="NAME[:PORT]",
+                   help="answer requests that name this host too (a name or address of this "
+                        "machine, or a proxy's); repeatable. Needed with --host 0.0.0.0")
+    p.add_argument("--max-request-mb", type=_megabytes, default=4.0, metavar="MB",
+                   help="the largest request body read, in MiB (default 4)")
     p.add_argument("--open", action="store_true", help="open the page in the browser")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run sweeps on a Dask cluster, e.g. tcp://127.0.0.1:8786")
@@ -27,7 +32,8 @@ def run_command(args) -> None:
     from sewfmu.app import app  # loaded on first use (start-up time)
 
     app(args.scenario, port=args.port, host=args.host, open_browser=args.open,
-        scheduler=args.scheduler, workers=args.workers)
+        scheduler=args.scheduler, workers=args.workers, allow_hosts=args.allow_host,
+        max_request_mb=args.max_request_mb)
 
 
 def _port(text: str) -> int:
@@ -38,4 +44,15 @@ def _port(text: str) -> int:
                                          f"{text!r}") from None
     if not 1 <= value <= 65535:
         raise argparse.ArgumentTypeError(f"expected a port number from 1 to 65535, got {value}")
+    return value
+
+
+def _megabytes(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    if value is None or not 0 < value <= 1024:
+        raise argparse.ArgumentTypeError(f"expected a number of MiB above 0, at most 1024, got "
+                                         f"{text!r}")
     return value

@@ -16,8 +16,11 @@ from __future__ import annotations
 
 import ipaddress
 import re
+import socket
 from dataclasses import dataclass, field
 from urllib.parse import urlsplit
+
+import sewfmu
 
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 EVERY_ADDRESS = ("0.0.0.0", "::", "")        # --host values that are no name a browser sends
@@ -68,7 +71,7 @@ class Allowed:
 def allowed_hosts(host: str, port: int | None, allow: list[str] | tuple = ()) -> Allowed:
     """The hosts a server started on `host`:`port` answers: the loopback names, `host` itself
     (unless it is every address), and each of `allow` (NAME or NAME:PORT, checked by
-    host_name)."""
+    check_hosts)."""
     names = set(LOOPBACK)
     if host not in EVERY_ADDRESS:
         names.add(_bare(host.lower()))
@@ -80,6 +83,31 @@ def allowed_hosts(host: str, port: int | None, allow: list[str] | tuple = ()) ->
         else:
             exact.add((name, given))
     return Allowed(frozenset(names), port, frozenset(anywhere), frozenset(exact))
+
+
+def check_hosts(host, names) -> list[str]:
+    """--allow-host's names, each a host name or address, with a port or without; at least one
+    where `host` is every address (0.0.0.0), which is no name a browser sends."""
+    if not isinstance(host, str):
+        raise sewfmu.ScenarioError(f"--host: expected an address or a host name, got {host!r}")
+    if isinstance(names, str):
+        names = [names]
+    if names is not None and not isinstance(names, (list, tuple)):
+        raise sewfmu.ScenarioError(f"allow_hosts: expected a list of host names, got {names!r}")
+    if host in EVERY_ADDRESS and not names:
+        raise sewfmu.ScenarioError(
+            f"--host {host or repr('')} serves on every address of this machine: name those a "
+            f"browser will use with --allow-host NAME (this machine: {own_names()})")
+    checked = []
+    for name in names or ():
+        try:
+            split_host(name)
+        except (ValueError, TypeError, AttributeError):
+            raise sewfmu.ScenarioError(
+                f"--allow-host: expected a host name or address like myhost.lan, 192.168.1.10 "
+                f"or [fe80::1], with :PORT or without, got {name!r}") from None
+        checked.append(name)
+    return checked
 
 
 def is_loopback(host: str) -> bool:
@@ -101,6 +129,16 @@ def split_host(text: str) -> tuple[str, int | None]:
     if name.startswith("["):
         ipaddress.IPv6Address(name[1:-1])        # ValueError if it is not an address
     return _bare(name), int(found.group(2)) if found.group(2) else None
+
+
+def own_names() -> str:
+    """This machine's name and addresses, as a refusal suggests them for --allow-host."""
+    name = socket.gethostname()
+    try:
+        found = {i[4][0] for i in socket.getaddrinfo(name, None, proto=socket.IPPROTO_TCP)}
+    except OSError:                       # a name that does not resolve: the name alone
+        found = set()
+    return ", ".join([name, *sorted(a for a in found if not is_loopback(a))])
 
 
 def _bare(name: str) -> str:

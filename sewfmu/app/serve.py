@@ -4,12 +4,14 @@ removes the one temporary folder all runs were written under."""
 from __future__ import annotations
 
 import html
+import io
 import shutil
 import signal
 import socket
 import sys
 import tempfile
 import threading
+import time
 import webbrowser
 from pathlib import Path
 
@@ -19,8 +21,9 @@ from flask import abort, send_file
 from werkzeug.serving import WSGIRequestHandler, make_server
 
 import sewfmu
-from sewfmu.app.callbacks import register, values_of_choice
+from sewfmu.app.callbacks import failed, register, values_of_choice
 from sewfmu.app.files import result_file
+from sewfmu.app.guard import MAX_BODY_MB, Allowed, Guard, allowed_hosts, check_hosts, is_loopback
 from sewfmu.app.jobs import Jobs
 from sewfmu.app.layout import page as page_layout
 from sewfmu.app.values import changed_values, command_line, short_run
@@ -37,23 +40,32 @@ class Page:
         self.root = root
         first = next(iter(choices.values()), None)      # the scenario the page shows first
         self.jobs = Jobs(root, warm=first)    # the first run's process made ready now
+        # one check at a time in this process: two at once (the warm-up and a first click, two
+        # tabs) extract the same FMU into the cache under the same process's scratch name
+        self._checking = threading.Lock()
         if first is not None:         # the first check of a value (FMUs' descriptions, units)
-            threading.Thread(target=_warm_checks, args=(first,), daemon=True).start()
+            threading.Thread(target=_warm_checks, args=(first, self._checking),
+                             daemon=True).start()
         self.scheduler = scheduler
         self.workers = workers
         self._lock = threading.Lock()
 
-    def check(self, label: str, typed: dict, defaults: dict) -> dict:
-        if label not in self.choices:
-            raise sewfmu.ScenarioError(f"unknown scenario {label!r}")
-        return changed_values(self.choices[label], typed, defaults)
+    def check(self, label, typed: dict, defaults) -> dict:
+        if not isinstance(label, str) or label not in self.choices:
+            raise sewfmu.ScenarioError(f"unknown scenario {label!r:.80}")
+        with self._checking:
+            return changed_values(self.choices[label], typed,
+                                  defaults if isinstance(defaults, dict) else {})
 
     def request(self, label: str, changed: dict) -> dict:
         source = self.choices[label]
         toml = None
         if not source.lower().endswith(".ssp"):
-            toml = Path(source).read_text(encoding="utf-8-sig") \
-                if source.lower().endswith(".toml") else sewfmu.show(source)
+            try:
+                toml = Path(source).read_text(encoding="utf-8-sig") \
+                    if source.lower().endswith(".toml") else sewfmu.show(source)
+            except (OSError, UnicodeDecodeError) as err:    # moved or changed since the start
+                raise sewfmu.ScenarioError(f"{source}: cannot be read now ({err})") from None
         return {"source": source, "scenario": label, "changed": changed, "toml": toml,
                 "command": command_line(label, changed)}
 
@@ -87,20 +99,29 @@ class Page:
         return job.result["variants"][entry["variant"]]
 
 
-def _warm_checks(source: str) -> None:
+def _warm_checks(source: str, checking: threading.Lock) -> None:
     """A value checked once, as a click on Run checks the user's: the first click then answers
     at once (reading the FMUs' descriptions and building the unit registry take about a second)."""
     try:
         short = short_run(source)
         if short is not None:
-            sewfmu.check(source, set=short)
+            with checking:
+                sewfmu.check(source, set=short)
     except Exception:           # a scenario that cannot be checked so: its first click says why
         pass
 
 
-def create(page: Page) -> dash.Dash:
+def create(page: Page, allowed: Allowed | None = None, max_body_mb: float = MAX_BODY_MB) \
+        -> dash.Dash:
+    """The page, every request to it through the Guard (guard.py): `allowed` the hosts it
+    answers (default: the loopback names, on any port), bodies of at most `max_body_mb` MiB."""
     app = dash.Dash("sewfmu", title="sewfmu", assets_folder=str(ASSETS), update_title=None,
-                    serve_locally=True)
+                    serve_locally=True, on_error=failed)
+    max_body = int(max_body_mb * 2**20)
+    # Flask's own limit too, for any body the Guard has let through (it checks the same length)
+    app.server.config["MAX_CONTENT_LENGTH"] = max_body
+    app.server.wsgi_app = Guard(app.server.wsgi_app, allowed or allowed_hosts("127.0.0.1", None),
+                                max_body)
     first = next(iter(page.choices), None)
     app.layout = page_layout(list(page.choices), values_of_choice(page, first))
     register(app, page)
@@ -149,16 +170,18 @@ def choices_of(named: list[str]) -> dict[str, str]:
 
 
 def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser: bool = False,
-          scheduler: str | None = None, workers: int | None = None, ready=None) -> None:
+          scheduler: str | None = None, workers: int | None = None, ready=None,
+          allow_hosts=(), max_request_mb: float = MAX_BODY_MB) -> None:
     """Serve the page until SIGINT or SIGTERM."""
+    allowed = allowed_hosts(host, port, check_hosts(host, allow_hosts))
     choices = choices_of(list(scenarios))
     root = Path(tempfile.mkdtemp(prefix="sewfmu_app_"))
     page = Page(choices, root, scheduler, workers)
     try:
         try:
             _free(host, port)
-            server = make_server(host, port, create(page).server, threaded=True,
-                                 request_handler=_Quiet)
+            server = make_server(host, port, create(page, allowed, max_request_mb).server,
+                                 threaded=True, request_handler=_Quiet)
         except OSError as err:
             raise PortTaken(f"{host}:{port}: cannot serve there ({err.strerror or err}); "
                             f"--port takes another") from None
@@ -167,8 +190,9 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
                   for s in (signal.SIGINT, signal.SIGTERM)}
         url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{server.port}/"
         if host not in ("127.0.0.1", "localhost", "::1"):
-            print(f"sewfmu: warning: serving on {host}: anyone who reaches port {server.port} "
-                  f"can run simulations on this machine", file=sys.stderr, flush=True)
+            where = "" if is_loopback(host) else f" (from {_names(allowed)})"
+            print(f"sewfmu: warning: serving on {host}: anyone who reaches port {server.port}"
+                  f"{where} can run simulations on this machine", file=sys.stderr, flush=True)
         print(f"sewfmu app: {url} (Ctrl-C stops it)", flush=True)
         thread = threading.Thread(target=server.serve_forever, name="sewfmu-app", daemon=True)
         thread.start()
@@ -198,10 +222,63 @@ def _free(host: str, port: int) -> None:
         probe.bind((host, port))
 
 
+def _names(allowed: Allowed) -> str:
+    return ", ".join(sorted({*allowed.names, *allowed.anywhere,
+                             *(f"{n}:{p}" for n, p in allowed.exact)}))
+
+
 class _Quiet(WSGIRequestHandler):
-    """No line per request on the terminal: the URL line and errors only."""
+    """No line per request on the terminal: the URL line and errors only.
+
+    After its answer, werkzeug reads whatever the client still sends, 10 MB a read, up to 10 GB
+    (so that a client sees a 413 rather than a reset): a client that announces a large body
+    and sends it slowly, or never, holds a thread and 10 MB each. Here the Guard (guard.py)
+    stops the reading once the answer is out (`sewfmu.stop_reading`), and what is left is
+    read for a moment and dropped (at most LINGER bytes, LINGER_S seconds) before the
+    connection closes: closed at once with unread bytes, the kernel resets it, and the client
+    may lose the answer. One request per connection (werkzeug sends Connection: close)."""
+
+    LINGER = 2**20            # bytes
+    LINGER_S = 1.0
+    _input = None             # the client's input, once the Guard has stopped its reading
 
     def log_request(self, *args, **kwargs) -> None:
+        pass
+
+    def make_environ(self):
+        environ = super().make_environ()
+        environ["sewfmu.stop_reading"] = self._stop_reading
+        return environ
+
+    def _stop_reading(self) -> None:
+        if self._input is None:
+            self._input, self.rfile = self.rfile, io.BytesIO()   # werkzeug's drain: nothing
+
+    def handle(self) -> None:
+        try:
+            super().handle()
+        finally:
+            getattr(self, "environ", {}).pop("sewfmu.stop_reading", None)    # no cycle left
+            if self._input is not None:
+                _linger(self.connection, self.LINGER, self.LINGER_S)
+                # closed here, as finish() closes only the rfile it finds: the socket itself
+                # closes only when every file made from it is closed
+                self._input.close()
+
+
+def _linger(connection, most: int, seconds: float) -> None:
+    """Half-close, then read and drop what comes until the client closes, `most` bytes or
+    `seconds` have passed (Apache's lingering close)."""
+    try:
+        connection.shutdown(socket.SHUT_WR)
+        connection.settimeout(seconds)
+        end, left = time.monotonic() + seconds, most
+        while left > 0 and time.monotonic() < end:
+            data = connection.recv(min(left, 65536))
+            if not data:
+                break
+            left -= len(data)
+    except OSError:             # the client is gone, or took longer: close as it is
         pass
 
 

@@ -71,15 +71,68 @@ def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str])
     its first step: {name: text}. A bad one raises sewfmu.Error with its one line."""
     changed = {}
     for name, text in typed.items():
-        text = "" if text is None else str(text).strip()
+        text = readable(name, text)
         if text == defaults.get(name) or _same_number(text, defaults.get(name)):
             continue
         if not text:
             raise _error(f"{name}: give a value (its scenario's is {defaults.get(name)})")
         changed[name] = text
     # as a run checks them before its first step (declared ranges too): a bad value starts nothing
-    sewfmu.check(source, set={name: value_of(text) for name, text in changed.items()})
+    checked(sewfmu.check, source, {name: value_of(text) for name, text in changed.items()})
     return changed
+
+
+# characters of a typed value the page reads ("-1.2345678901234567e-300 rad/s" is 31): a longer
+# one is refused before any parser works through it (5000 digits passed Python's limit of
+# integer digits; a long text costs the unit parser time)
+MAX_TEXT = 200
+ACCEPTED = 'give a number, or a number with its unit like "955 rpm"'
+
+
+def readable(name: str, text) -> str:
+    """A typed value as text, stripped, that value_of reads: one past MAX_TEXT characters, or
+    one whose reading raises anything (a parser's failure on odd text), is a sewfmu.Error."""
+    text = "" if text is None else str(text).strip()
+    if len(text) > MAX_TEXT:
+        raise _error(f"{name}: a value of {len(text)} characters, at most {MAX_TEXT} are read; "
+                     f"{ACCEPTED}")
+    try:
+        value_of(text)
+    except Exception as err:        # any failure to read the text: its one line
+        raise _unreadable(f"{name} = {text!r}", err) from None
+    return text
+
+
+def checked(check, source: str, values: dict) -> None:
+    """check(source, set=values) (sewfmu.check or sewfmu.load), whatever it raises a
+    sewfmu.Error: the value parser's own failure on odd text (ValueError, OverflowError, pint's
+    errors) is still a value the user typed, said in one line that names it, not a 500."""
+    try:
+        check(source, set=values)
+    except sewfmu.Error:
+        raise
+    except Exception as err:        # any parser failure: see the docstring
+        culprit = next((name for name in values if _fails_oddly(check, source, name,
+                                                                values[name])), None)
+        raise _unreadable(f"{culprit} = {str(values[culprit])!r}" if culprit else
+                          ", ".join(f"{n} = {str(v)!r}" for n, v in values.items()),
+                          err) from None
+
+
+def _fails_oddly(check, source: str, name: str, value) -> bool:
+    """The value alone makes check raise something other than a sewfmu.Error."""
+    try:
+        check(source, set={name: value})
+    except sewfmu.Error:
+        return False
+    except Exception:               # the failure checked() names the value of
+        return True
+    return False
+
+
+def _unreadable(what: str, err: Exception) -> Exception:
+    reason = " ".join(str(err).split()) or type(err).__name__
+    return _error(f"set {what}: not a value sewfmu can read ({reason}); {ACCEPTED}")
 
 
 def _same_number(text: str, default: str | None) -> bool:
