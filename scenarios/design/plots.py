@@ -8,27 +8,20 @@ from pathlib import Path
 
 import numpy as np
 
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.files.outputs import write_atomic
-
-
-def _pyplot():
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
-
-    return plt
 
 
 def _save(fig, path: Path) -> None:
     write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"), binary=True)
-    _pyplot().close(fig)
+    pyplot().close(fig)
 
 
 def convergence(path: Path, name: str, goal, constraints, table, margins,
                 units: dict) -> None:
     """The goal's figure at each evaluation in order, the best feasible so far, the points that
     miss a constraint (hollow) or failed (crosses on the axis); one panel per constraint."""
-    plt = _pyplot()
+    plt = pyplot()
     figures = [goal.targets[0][0]] + [c.figure for c in constraints]
     fig, axes = plt.subplots(len(figures), 1, sharex=True, figsize=(8, 2.2 + 2.0 * len(figures)),
                              squeeze=False)
@@ -77,7 +70,7 @@ def _labelled(name: str, units: dict) -> str:
 def fit_plot(path: Path, name: str, times, data: dict, model_time, model: dict,
              units: dict) -> None:
     """Each column: the data as points, the model at the estimates as a line, the residuals."""
-    plt = _pyplot()
+    plt = pyplot()
     columns = list(data)
     fig, axes = plt.subplots(2 * len(columns), 1, sharex=True,
                              figsize=(8, 3.2 * len(columns) + 0.6), squeeze=False,
@@ -104,7 +97,7 @@ def fit_plot(path: Path, name: str, times, data: dict, model_time, model: dict,
 def sensitivity_bars(path: Path, figure: str, unit: str, method: str, rows: list[dict]) -> None:
     """The parameters ranked by their index (Sobol: ST beside S1; Morris: mu* beside sigma),
     with the confidence intervals as error bars."""
-    plt = _pyplot()
+    plt = pyplot()
     first, second = ("ST", "S1") if method == "sobol" else ("mu_star", "sigma")
     names = [r["parameter"] for r in rows][::-1]
     y = np.arange(len(names))

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.mechanisms.base import RoleError, column, whole_revolution
 
 FRAMES = 36
@@ -74,10 +75,9 @@ def _scene(result):
 
 def animate(result, path: Path) -> Animation:
     """Write the GIF of a run of an animated analysis; return where its drawing lies."""
-    import matplotlib  # matplotlib: only when drawing
     from PIL import Image  # pillow: only when animating
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     kind = result.scenario.analysis
     drawing = mechanism(kind).animation if kind else None

@@ -23,6 +23,7 @@ from sewfmu.components.carriage import (
 )
 from sewfmu.components.oscillator import DampedOscillator
 from sewfmu.components.parameters import with_values
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.mechanisms.animation import angle_label
 from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
@@ -58,9 +59,7 @@ def summary_of_run(result) -> dict:
 
 
 def plot(curves, path, title: str) -> None:
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, (ax_x, ax_a, ax_u) = plt.subplots(3, 1, sharex=True, figsize=(10, 8))
     for label, result in curves:
@@ -162,9 +161,7 @@ def resonance_study(given: Mapping[str, Mapping] | None = None) -> dict:
 
 
 def plot_resonance(study: dict, path) -> None:
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, ax = plt.subplots(figsize=(9, 5))
     for name, curve in study["designs"].items():

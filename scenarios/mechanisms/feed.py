@@ -17,6 +17,7 @@ import numpy as np
 from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.components.parameters import with_values
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.mechanisms.animation import angle_label, reach
 from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
@@ -73,9 +74,7 @@ def _draw(ax, model: FeedLinkage, phi1: float, color) -> None:
 
 def plot(curves, path, title: str) -> None:
     """The mechanism at four crank angles with M's path; φ3, φ7, φ5 against φ1."""
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig = plt.figure(figsize=(12, 8))
     ax_mech = fig.add_subplot(1, 2, 1)
@@ -142,9 +141,7 @@ def ratio_study(given: Mapping[str, Mapping] | None = None) -> dict:
 
 
 def plot_study(study: dict, path) -> None:
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, (ax_curves, ax_lever, ax_rods) = plt.subplots(1, 3, figsize=(15, 4.8))
     for row in study["lever_ratio"]:

@@ -23,6 +23,7 @@ from sewfmu.components.parameters import with_values
 from sewfmu.components.punch_contact import GRAVITY, PunchContactParams
 from sewfmu.components.punch_linkage import SIX_BAR, PunchLinkage, PunchLinkageParams
 from sewfmu.components.shaft import MainShaft, ShaftParams
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.mechanisms.animation import angle_label
 from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
@@ -156,9 +157,7 @@ def monolithic_figures(scenario, rtol: float | None = None,
 # --- plots ------------------------------------------------------------------------------------
 def plot(curves, path, title: str) -> None:
     """y(φ) and F2(φ) over the last revolution; `curves` is a list of (label, run result)."""
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, (ax_y, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     for label, result in curves:

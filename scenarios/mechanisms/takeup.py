@@ -17,6 +17,7 @@ import numpy as np
 from sewfmu.components.kinematics import AssemblyError
 from sewfmu.components.parameters import with_values
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.mechanisms.animation import angle_label, reach
 from sewfmu.scenarios.mechanisms.base import (
     Mechanism,
@@ -107,9 +108,7 @@ def _model_of(result) -> TakeupLinkage:
 def plot(curves, path, title: str) -> None:
     """E's path with the linkage drawn at four crank angles; displacement, speed (analytic and
     central-difference) and acceleration of E against the crank angle (last revolution)."""
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     (ax_path, ax_disp), (ax_speed, ax_acc) = axes
@@ -206,9 +205,7 @@ def tolerance_study(given: Mapping[str, Mapping] | None = None) -> dict:
 
 
 def plot_tolerance(study: dict, path) -> None:
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     fig, (ax_path, ax_bar, ax_pin) = plt.subplots(1, 3, figsize=(15, 4.8))
     nominal = with_values(TakeupParams(), **study["design"])

@@ -29,6 +29,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.references.reference_files import (
     check_experiment,
@@ -324,9 +325,7 @@ def plot_file(folder: Path, model: str, where) -> Path:
 def plot(fmu_name: str, got: dict, reference: Reference, deviations: list[Deviation],
          path: Path) -> Path:
     """The deviating variables against their reference, and the differences."""
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     names = [d.variable for d in deviations if not d.why][:6]
     fig, axes = plt.subplots(len(names), 2, figsize=(10, 2.6 * len(names)), squeeze=False)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sewfmu.extras import require
+from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.files.outputs import (
     OutputError,
     drop_torn_line,
@@ -411,9 +412,7 @@ def sweep_figure(rows: list[dict], swept: list[str], figures: dict[str, str],
     """Each key figure (figure -> unit) against each swept parameter (units: parameter ->
     unit), one line per combination of the others: a matplotlib Figure. A numeric parameter is
     spaced by its values; any other (a master's name) is one tick per value."""
-    import matplotlib  # matplotlib: only when drawing
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
+    plt = pyplot()          # matplotlib, its files out of the user's home
 
     ok = [r for r in rows if r["status"] == "ok"]
     # one column is wide enough for the title's lines; constrained layout keeps the title and
@@ -460,8 +459,7 @@ def sweep_figure(rows: list[dict], swept: list[str], figures: dict[str, str],
 def plot_table(rows: list[dict], swept: list[str], figures: dict[str, str], path: Path,
                title: str, units: dict[str, str]) -> None:
     """The figure of sweep_figure, as a PNG."""
-    import matplotlib.pyplot as plt  # matplotlib: only when drawing
-
+    plt = pyplot()          # matplotlib, its files out of the user's home
     fig = sweep_figure(rows, swept, figures, units, title)
     write_atomic(path, lambda f: fig.savefig(f, dpi=100, format="png"), binary=True)
     plt.close(fig)
