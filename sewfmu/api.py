@@ -312,14 +312,20 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
           report: bool = False, progress: bool = False, results: bool = False,
-          on_point: Callable[[dict], None] | None = None) -> Sweep:
+          on_point: Callable[[dict], None] | None = None, max_runs: int | None = None) -> Sweep:
     """Run a grid of points in parallel: the scenario's [sweep] table, or `grid`
     ({"instance.parameter": [values]}, added to it). With `out`, what `sewfmu sweep --out`
     writes (and an interrupted sweep into the same folder resumes); `results` keeps each point's
     results.csv there. `on_point(row)` hears of each point as it finishes (its row as in
-    `rows`, in the order they finish). A sweep whose every point failed is a ScenarioError."""
+    `rows`, in the order they finish). A sweep whose every point failed is a ScenarioError.
+    The points are counted before any is made: more than `max_runs` (default 10,000, or
+    SEWFMU_MAX_RUNS) is refused; the count and a time estimate go to stderr before the first
+    run, with `progress` or where it will take long."""
+    from sewfmu.scenarios.runs import budget  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
+        count_points,
         points_of,
+        refuse_fixed_and_varied,
         run_sweep,
         sweep_pictures,
     )
@@ -328,7 +334,12 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     if grid is not None and not isinstance(grid, Mapping):
         raise ScenarioError(f"grid: expected a dict of 'instance.parameter': [values], got "
                             f"{type(grid).__name__}")
-    grid = {str(k): _values_of(k, v) for k, v in (grid or {}).items()}
+    grid = {str(k): v for k, v in (grid or {}).items()}
+    spec = sc.sweep or {}
+    refuse_fixed_and_varied(set, grid, "swept", "--grid, grid=")
+    refuse_fixed_and_varied(set, [*spec.get("grid", {}), *(k for p in spec.get("points", [])
+                                                           for k in p)],
+                            "swept", f"the [sweep] table of {sc.source}")
     if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
         raise ScenarioError(f"scheduler: expected a Dask scheduler's address such as "
                             f"'tcp://127.0.0.1:8786', got {scheduler!r}")
@@ -336,16 +347,31 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
                                 or plain(workers) < 1):
         raise ScenarioError(f"workers: expected a whole number >= 1, got {workers!r}")
     out = _folder(out, "out")
+    # counted from the axes' lengths, before a value list or a point is made
+    count, cause = count_points(sc, {k: _length(v, k) for k, v in grid.items()})
+    per_run = budget.seconds_per_run(sc) if scheduler is None else None
+    parallel = budget.cpu_workers(workers)
+    budget.check(count, f"sweep {sc.name}", budget.max_runs(max_runs), cause, per_run, parallel)
+    budget.announce(f"sweep {sc.name}", count, per_run, parallel, shown=bool(progress))
+    grid = {k: _values_of(k, v) for k, v in grid.items()}
     points = points_of(sc, grid)
     swept = [name for name, _ in points[0].values]
     if (plot or report) and out is None:
         raise ScenarioError("plot and report are files: give out= a folder for them")
+    drawing = out is not None and (plot or report)
+    drawn = [f"{sc.name}_sweep.png"] * bool(sc.analysis) + ["report.html"] * bool(report) \
+        if drawing else []
+
+    def pictures(staging: Path, rows: list[dict]) -> None:
+        if drawing and any(r["status"] == "ok" for r in rows):
+            sweep_pictures(sc, rows, swept, staging, report=report)
+
     with tempfile.TemporaryDirectory(prefix="sewfmu_sweep_") as scratch:
         folder = Path(out) if out is not None else Path(scratch)
         try:
             rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
                              keep_results=results and out is not None, progress=progress,
-                             on_point=on_point)
+                             on_point=on_point, outputs=drawn, finish=pictures)
         except OSError as err:
             raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
                 from None
@@ -353,8 +379,6 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
             raise SweepFailed(f"every point of the sweep failed ({len(rows)} of {len(rows)}; "
                               f"the first: {rows[0]['error']})"
                               + (f"; see {folder}/sweep.csv" if out is not None else ""), rows)
-        if out is not None and (plot or report):
-            sweep_pictures(sc, rows, swept, folder, report=report)
     units = {target: _unit_of(sc, target) for target in swept}
     units.update({"stop_time": "s", "wall_time_s": "s", **sc.figure_units()})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
@@ -370,6 +394,13 @@ def _values_of(name, values) -> list:
     if not values:
         raise ScenarioError(f"grid: {name} has no values")
     return values
+
+
+def _length(values, name) -> int:
+    """How many values a grid gives a parameter, without a copy of them where they say it."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
+        return len(_values_of(name, values))        # one value, a generator
+    return len(values)
 
 
 def _folder(value, name: str) -> Path | None:

@@ -21,13 +21,21 @@ from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
 
-def _load_with_sets(name: str, sets: list[str]):
-    scenario = load(name)
+def _set_values(sets: list[str]) -> dict:
+    """--set options as {instance.parameter: value} (the last of one name wins)."""
+    values = {}
     for item in sets or []:
         target, eq, text = item.partition("=")
         if not eq:
             raise ScenarioError(f"--set {item}: expected instance.parameter=value")
-        scenario.set_value(target.strip(), parse_value(text.strip(), f"--set {item}"))
+        values[target.strip()] = parse_value(text.strip(), f"--set {item}")
+    return values
+
+
+def _load_with_sets(name: str, sets: list[str]):
+    scenario = load(name)
+    for target, value in _set_values(sets).items():
+        scenario.set_value(target, value)
     return scenario
 
 
@@ -99,9 +107,10 @@ def cmd_sweep(args) -> None:
     grid = dict(parse_grid_option(g) for g in args.grid or [])
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_sweep"
     try:
-        sweep = api.sweep(scenario, grid, workers=args.workers, scheduler=args.scheduler,
-                          out=out, plot=args.plot, report=args.report, progress=not args.quiet,
-                          results=args.results)
+        sweep = api.sweep(scenario, grid, _set_values(args.set), workers=args.workers,
+                          scheduler=args.scheduler, out=out, plot=args.plot, report=args.report,
+                          progress=not args.quiet, results=args.results,
+                          max_runs=args.max_runs)
         rows = sweep.rows
     except api.SweepFailed as err:
         rows = err.rows
@@ -174,7 +183,7 @@ def _references_of_files(args) -> None:
         for fmu in args.fmu:
             print(f"wrote {reference_check.record(Path(fmu), Path(args.refs))}")
         return
-    failing = 0
+    failing, drawn = 0, []
     for fmu in args.fmu:
         for outcome in reference_check.check(Path(fmu), args.refs, args.rtol, args.atol):
             for deviation in outcome.deviations:
@@ -183,12 +192,19 @@ def _references_of_files(args) -> None:
             if not outcome.deviations:
                 print(f"{Path(fmu).name}: matches {outcome.reference.source}")
             elif args.plot:
-                folder = Path(args.plot)
-                folder.mkdir(parents=True, exist_ok=True)
-                picture = fmu_reference.plot_file(folder, outcome.reference.model, fmu)
-                fmu_reference.plot(Path(fmu).name, outcome.got, outcome.reference,
-                                   outcome.deviations, picture)
-                print(f"wrote {picture}")
+                drawn.append((fmu, outcome))
+    if drawn:
+        from sewfmu.scenarios.files.outputs import replacing  # only when drawing
+
+        folder = Path(args.plot)
+        # in place of the last pictures written there, never over a file sewfmu did not write
+        with replacing(folder) as staging:
+            pictures = [fmu_reference.plot(Path(fmu).name, outcome.got, outcome.reference,
+                                           outcome.deviations, fmu_reference.plot_file(
+                                               staging, outcome.reference.model, fmu))
+                        for fmu, outcome in drawn]
+        for picture in pictures:
+            print(f"wrote {folder / Path(picture).name}")
     if failing:
         raise ScenarioError(f"{failing} variables deviate from their references")
 
@@ -341,6 +357,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", help="output folder (default: results/SCENARIO_sweep/); an "
                                  "interrupted sweep into the same folder resumes")
     p.add_argument("--results", action="store_true", help="also keep each point's results.csv")
+    console.max_runs_option(p)
     p.add_argument("--plot", action="store_true", help="plot the figures against the parameters")
     p.add_argument("--report", action="store_true",
                    help="report.html: what was run, the table of points and the plot")

@@ -118,3 +118,10 @@ def at_least(least: int):
 
 # a count of at least 1 (workers, evaluations)
 whole_number = at_least(1)
+
+
+def max_runs_option(parser) -> None:
+    """--max-runs, the bound on a sweep's or a study's runs (scenarios/runs/budget.py)."""
+    parser.add_argument("--max-runs", type=whole_number, metavar="N",
+                        help="refuse more runs than this, counted before the first (default "
+                             "10000, or SEWFMU_MAX_RUNS)")

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from sewfmu import design_api as api
-from sewfmu.console import at_least, whole_number
+from sewfmu.console import at_least, max_runs_option, whole_number
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
 
@@ -59,7 +59,8 @@ def cmd_optimize(args) -> None:
                      target={k.strip(): v.strip() for k, v in target.items()} if target else None,
                      constraints=args.constraint, set=_sets(args.set), method=args.method,
                      workers=args.workers, out=out, plot=args.plot,
-                     max_evaluations=args.max_evaluations, progress=not args.quiet)
+                     max_evaluations=args.max_evaluations, progress=not args.quiet,
+                     max_runs=args.max_runs)
     if not o.feasible:
         _warn("no evaluated point meets every constraint: the one closest to meeting them "
               "is shown")
@@ -86,7 +87,8 @@ def cmd_optimize(args) -> None:
 def cmd_fit(args) -> None:
     out = Path(args.out) if args.out else Path("results") / f"{Path(args.scenario).stem}_fit"
     f = api.fit(args.scenario, args.data, _ranges(args.free, "--free"), set=_sets(args.set),
-                out=out, max_evaluations=args.max_evaluations, progress=not args.quiet)
+                out=out, max_evaluations=args.max_evaluations, progress=not args.quiet,
+                max_runs=args.max_runs)
     if not f.converged:
         _warn(f"least_squares did not converge ({f.message})")
     for note in f.summary.get("warnings", []):
@@ -105,7 +107,8 @@ def cmd_sensitivity(args) -> None:
         Path("results") / f"{Path(args.scenario).stem}_sensitivity"
     s = api.sensitivity(args.scenario, _ranges(args.vary, "--vary"), args.figure,
                         set=_sets(args.set), method=args.method, samples=args.samples,
-                        workers=args.workers, out=out, progress=not args.quiet)
+                        workers=args.workers, out=out, progress=not args.quiet,
+                        max_runs=args.max_runs)
     if s.failed:
         _warn(f"{s.failed} of {s.runs} samples failed (see {out}/sweep.csv); their groups are "
               f"left out of the indices")
@@ -151,6 +154,7 @@ def add_commands(sub) -> None:
                    help="output folder (default: results/SCENARIO_optimize/); a study "
                                  "run again into it resumes")
     p.add_argument("--plot", action="store_true", help="convergence.png")
+    max_runs_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_optimize)
     p = sub.add_parser("fit", help="parameters learnt from measured time series")
@@ -165,6 +169,7 @@ def add_commands(sub) -> None:
                         "besides the n runs of each finite-difference Jacobian")
     p.add_argument("--out", metavar="DIR", help="output folder (default: results/SCENARIO_fit/); "
                                                 "a fit run again into it resumes")
+    max_runs_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_fit)
     p = sub.add_parser("sensitivity", help="which parameters matter to key figures (SALib)")
@@ -184,5 +189,6 @@ def add_commands(sub) -> None:
     p.add_argument("--out", metavar="DIR",
                    help="output folder (default: results/SCENARIO_sensitivity/); a "
                                  "study run again into it resumes")
+    max_runs_option(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_sensitivity)

@@ -36,7 +36,14 @@ import numpy as np
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
-from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
+from sewfmu.scenarios.files.outputs import (
+    claim,
+    drop_torn_line,
+    held,
+    refuse_theirs,
+    remove_debris,
+    set_aside,
+)
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
@@ -62,6 +69,35 @@ class Evaluation:
     key: str = ""
     index: int = -1                        # its line in evaluations.csv
     reused: bool = False                   # found in the record, not run now
+
+
+@contextlib.contextmanager
+def study_folder(folder: Path | None, records: Sequence[str], outputs: Sequence[str], ours):
+    """A study's output folder, the one rule of files/outputs.py: held from the first check to
+    the last file; every name the study will write (`records`, appended run by run, and
+    `outputs`, written at its end through outputs.replacing(folder, kept=records)) checked
+    before the first run, a file sewfmu did not write refused in one line (`ours(name)`: a
+    record of sewfmu's from before folders kept a manifest); the records listed in the
+    folder's manifest before they are written. No folder (out=None): nothing to hold."""
+    if folder is None:
+        yield
+        return
+    folder = Path(folder)
+    with held(folder):
+        remove_debris(folder)
+        refuse_theirs(folder, [*records, *outputs], ours)
+        claim(folder, records)
+        yield
+
+
+def is_a_log(path: Path) -> bool:
+    """evaluations.csv as a study writes it: its header's first and last columns."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            header = f.readline().rstrip("\r\n")
+    except OSError:
+        return False
+    return header.startswith("index,") and header.endswith(",error,key")
 
 
 def progress_bar(enabled: bool, what: str, total: int | None):

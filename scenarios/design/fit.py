@@ -29,12 +29,13 @@ from scipy import optimize as so
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
-from sewfmu.scenarios.design.evaluations import one_line, progress_bar
-from sewfmu.scenarios.design.fit_record import FitRecord
+from sewfmu.scenarios.design.evaluations import one_line, progress_bar, study_folder
+from sewfmu.scenarios.design.fit_record import RECORD_FILE, FitRecord, is_a_record
 from sewfmu.scenarios.design.space import Variable, evaluation_budget
-from sewfmu.scenarios.files.outputs import write_atomic
+from sewfmu.scenarios.files.outputs import replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.runs import budget as runs_budget
 
 SETTINGS = {"method": "trf", "diff_step": 1e-3, "xtol": 1e-8, "ftol": 1e-10, "gtol": 1e-10}
 DEFAULT_EVALUATIONS = 100
@@ -272,11 +273,27 @@ class _Model:
 
 def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
         out: Path | None = None, plot: bool = True, max_evaluations: int | None = None,
-        progress: bool = False) -> Fit:
+        progress: bool = False, max_runs: int | None = None) -> Fit:
     """Least squares over the free parameters (module docstring) of the scenario that
-    check_data made; with `out`, fit.json and fit.png."""
-    started = time.perf_counter()
+    check_data made; with `out`, fit.json and fit.png. The most runs the budget allows (each
+    evaluation of the residuals and its Jacobian's n runs) is checked against the bound on
+    runs (runs/budget.py) and said, with a time estimate, before the first run."""
     budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS)
+    # least_squares' max_nfev leaves out the Jacobians' runs: n more per evaluation at most,
+    # and the first guess and the optimum's series for the plot besides
+    most = budget * (len(free) + 1) + 2
+    what, per_run = f"fit {scenario.name}", runs_budget.seconds_per_run(scenario)
+    runs_budget.check(most, what, runs_budget.max_runs(max_runs),
+                      f"--max-evaluations {budget} × ({len(free)} free + 1)", per_run)
+    outputs = ["fit.json", *(["fit.png"] if plot else [])]
+    with study_folder(out, [RECORD_FILE], outputs, lambda name: is_a_record(Path(out) / name)):
+        runs_budget.announce(what, most, per_run, shown=progress, most=True)
+        return _fit(scenario, fmu_paths, free, data, out, plot, budget, progress)
+
+
+def _fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
+         out: Path | None, plot: bool, budget: int, progress: bool) -> Fit:
+    started = time.perf_counter()
     record = FitRecord(out, scenario, fmu_paths, [v.name for v in free], data) \
         if out is not None else None
     bar = progress_bar(progress, f"fit {scenario.name}", None)
@@ -338,14 +355,15 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
         "method": "least_squares", "settings": SETTINGS, "end_time": float(t_run[-1]),
         "wall_time_s": round(time.perf_counter() - started, 3),
     }
-    if out is not None:
+    if out is not None:             # in place of the last study's files, with its record
         out = Path(out)
-        write_atomic(out / "fit.json", lambda f: json.dump(summary, f, indent=2))
-        if plot:
-            from sewfmu.scenarios.design.plots import fit_plot  # matplotlib: only when drawing
+        with replacing(out, kept=[RECORD_FILE]) as staging:
+            write_atomic(staging / "fit.json", lambda f: json.dump(summary, f, indent=2))
+            if plot:
+                from sewfmu.scenarios.design.plots import fit_plot  # matplotlib: when drawing
 
-            fit_plot(out / "fit.png", scenario.name, data.time, data.columns, t_run, series,
-                     units)
+                fit_plot(staging / "fit.png", scenario.name, data.time, data.columns, t_run,
+                         series, units)
     return Fit(scenario.name, estimates, dict(zip(names, se.tolist())), summary["correlation"],
                residuals, rms, units, bool(r.success), str(r.message), model.runs + model.reused,
                out, summary)

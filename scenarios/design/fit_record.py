@@ -92,6 +92,16 @@ class FitRecord:
         self._folder.close()
 
 
+def is_a_record(path: Path) -> bool:
+    """A fit's record, by its first line (folders from before the manifest)."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            header = _json(f.readline())
+    except OSError:
+        return False
+    return isinstance(header, dict) and header.get("record") == "sewfmu fit"
+
+
 def _json(line: str):
     try:
         return json.loads(line)

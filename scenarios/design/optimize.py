@@ -33,7 +33,15 @@ from scipy import optimize as so
 from scipy.stats import qmc
 
 from sewfmu.extras import require
-from sewfmu.scenarios.design.evaluations import OK, Evaluation, Evaluator, progress_bar
+from sewfmu.scenarios.design.evaluations import (
+    LOG_FILE,
+    OK,
+    Evaluation,
+    Evaluator,
+    is_a_log,
+    progress_bar,
+    study_folder,
+)
 from sewfmu.scenarios.design.space import (
     CONSTRAINT_TOLERANCE,
     Constraint,
@@ -42,9 +50,10 @@ from sewfmu.scenarios.design.space import (
     evaluation_budget,
     figures_of_scenario,
 )
-from sewfmu.scenarios.files.outputs import write_atomic
+from sewfmu.scenarios.files.outputs import replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.runs import budget as runs_budget
 
 METHODS = ("local", "global")
 PENALTY = 1e9              # an infeasible point, to the optimizer: worse than any feasible one
@@ -151,9 +160,12 @@ class _Problem:
 def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goal: Goal,
              constraints: list[Constraint], method: str = "local", workers: int | None = None,
              out: Path | None = None, plot: bool = False,
-             max_evaluations: int | None = None, progress: bool = False) -> Optimum:
+             max_evaluations: int | None = None, progress: bool = False,
+             max_runs: int | None = None) -> Optimum:
     """Optimize the goal under the constraints over the variables' ranges (module docstring);
-    with `out`, evaluations.csv as the points run, optimize.json and with `plot` convergence.png."""
+    with `out`, evaluations.csv as the points run, optimize.json and with `plot` convergence.png.
+    The budget of evaluations is checked against the bound on runs (runs/budget.py) and said,
+    with a time estimate, before the first run."""
     if method not in METHODS:
         raise ScenarioError(f"--method: one of {', '.join(METHODS)}, got {method!r}")
     if workers is None:               # the local methods run here; the global one on every core
@@ -161,6 +173,20 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ScenarioError(f"--workers: a whole number >= 1, got {workers!r}")
     budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS[method])
+    parallel = workers if method == "global" else 1
+    what, per_run = f"optimize {scenario.name}", runs_budget.seconds_per_run(scenario)
+    runs_budget.check(budget, what, runs_budget.max_runs(max_runs),
+                      f"--max-evaluations {budget}", per_run, parallel)
+    outputs = ["optimize.json", *(["convergence.png"] if plot else [])]
+    with study_folder(out, [LOG_FILE], outputs, lambda name: is_a_log(Path(out) / name)):
+        runs_budget.announce(what, budget, per_run, parallel, shown=progress, most=True)
+        return _optimize(scenario, fmu_paths, variables, goal, constraints, method, workers,
+                         out, plot, budget, progress)
+
+
+def _optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goal: Goal,
+              constraints: list[Constraint], method: str, workers: int, out: Path | None,
+              plot: bool, budget: int, progress: bool) -> Optimum:
     units = figures_of_scenario(scenario)
     started = time.perf_counter()
     evaluator = Evaluator(scenario, fmu_paths, [v.name for v in variables], list(units),
@@ -201,13 +227,16 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
                              for f, t in goal.targets}
     objective = [problem.objective_of(e) for e in evaluator.history]
     table = evaluator.table({"objective": [math.nan if o is None else o for o in objective]})
-    if out is not None:
-        _write_json(Path(out) / "optimize.json", summary)
-        if plot:
-            from sewfmu.scenarios.design.plots import convergence  # matplotlib: only when drawing
+    if out is not None:             # in place of the last study's files, with its record
+        with replacing(Path(out), kept=[LOG_FILE]) as staging:
+            _write_json(staging / "optimize.json", summary)
+            if plot:
+                from sewfmu.scenarios.design.plots import (  # matplotlib: only when drawing
+                    convergence,
+                )
 
-            convergence(Path(out) / "convergence.png", scenario.name, goal, constraints, table,
-                        [problem.margins_of(e) for e in evaluator.history], units)
+                convergence(staging / "convergence.png", scenario.name, goal, constraints,
+                            table, [problem.margins_of(e) for e in evaluator.history], units)
     if best is None:
         reasons = sorted({e.error for e in evaluator.history if e.error})
         wanted = ", ".join(dict.fromkeys(goal.figures + [c.figure for c in constraints]))

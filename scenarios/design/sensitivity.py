@@ -28,6 +28,7 @@ from sewfmu.scenarios.design.space import Variable
 from sewfmu.scenarios.files.outputs import write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, plain
+from sewfmu.scenarios.runs import budget as runs_budget
 from sewfmu.scenarios.runs.sweep import Point, run_sweep
 
 METHODS = ("sobol", "morris")
@@ -35,6 +36,7 @@ DEFAULT_SAMPLES = {"sobol": 64, "morris": 16}
 MORRIS_LEVELS = 4
 SEED = 1
 CONFIDENCE = 0.95
+_GROUP = {"sobol": "Saltelli block", "morris": "trajectory"}
 INDICES = {"sobol": ("S1", "S1_conf", "ST", "ST_conf"),
            "morris": ("mu", "mu_star", "mu_star_conf", "sigma")}
 
@@ -83,9 +85,11 @@ def analyze(method: str, problem: dict, X: np.ndarray, Y: np.ndarray) -> dict[st
 def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str],
                 units: dict[str, str], method: str = "sobol", samples: int | None = None,
                 workers: int | None = None, out: Path | None = None,
-                progress: bool = False) -> Sensitivity:
+                progress: bool = False, max_runs: int | None = None) -> Sensitivity:
     """Sample, run (a sweep), analyze; with `out`, sensitivity.json, the sweep's files and a
-    bar chart per figure (sensitivity_FIGURE.png)."""
+    bar chart per figure (sensitivity_FIGURE.png), in place of the last study's (the sweep's
+    one rule of files: runs/sweep.py). The runs are counted from the samples before SALib draws
+    them: over the bound on runs (runs/budget.py) refused, else said with a time estimate."""
     if method not in METHODS:
         raise ScenarioError(f"--method: one of {', '.join(METHODS)}, got {method!r}")
     samples = DEFAULT_SAMPLES[method] if samples is None else plain(samples)
@@ -93,14 +97,54 @@ def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str
         raise ScenarioError(f"--samples: a whole number >= 2, got {samples!r}")
     if method == "sobol" and samples & (samples - 1):       # Saltelli's scheme needs it
         raise ScenarioError(f"--samples: Sobol sampling takes a power of 2, got {samples}")
+    group = len(variables) + (2 if method == "sobol" else 1)
+    what, per_run = f"sensitivity {scenario.name}", runs_budget.seconds_per_run(scenario)
+    parallel = runs_budget.cpu_workers(workers)
+    runs_budget.check(samples * group, what, runs_budget.max_runs(max_runs),
+                      f"--samples {samples} × {group} runs a {_GROUP[method]}", per_run,
+                      parallel)
+    runs_budget.announce(what, samples * group, per_run, parallel, shown=progress)
     names = [v.name for v in variables]
     problem = {"num_vars": len(variables), "names": names,
                "bounds": [[v.lo, v.hi] for v in variables]}
     X = sample(method, problem, samples)
     points = [Point(i, tuple(zip(names, map(float, row)))) for i, row in enumerate(X)]
+    made: dict[str, Any] = {}
+    pictures = [f"sensitivity_{_file_name(f)}.png" for f in figures]
+
+    def analysis(staging: Path, rows: list[dict]) -> None:
+        """The indices, written beside the sweep's table in one piece with it; a study whose
+        samples give no indices leaves the table alone (its points say why)."""
+        try:
+            made["result"], table_rows = _analyzed(scenario, variables, figures, units, method,
+                                                   samples, problem, X, rows, out)
+        except ScenarioError as err:
+            made["error"] = err
+            return
+        if out is not None:
+            summary = made["result"].summary
+            write_atomic(staging / "sensitivity.json", lambda f: json.dump(summary, f, indent=2))
+            from sewfmu.scenarios.design.plots import sensitivity_bars  # matplotlib: to draw
+
+            for f, picture in zip(figures, pictures):
+                sensitivity_bars(staging / picture, f, units.get(f, ""), method,
+                                 [r for r in table_rows if r["figure"] == f])
+
     with tempfile.TemporaryDirectory(prefix="sewfmu_sensitivity_") as scratch:
         folder = Path(out) if out is not None else Path(scratch)
-        rows = run_sweep(scenario, points, folder, workers=workers, progress=progress)
+        run_sweep(scenario, points, folder, workers=workers, progress=progress,
+                  outputs=["sensitivity.json", *pictures] if out is not None else [],
+                  finish=analysis)
+    if "error" in made:
+        raise made["error"]
+    return made["result"]
+
+
+def _analyzed(scenario: Scenario, variables: list[Variable], figures: list[str],
+              units: dict[str, str], method: str, samples: int, problem: dict, X: np.ndarray,
+              rows: list[dict], out: Path | None) -> tuple[Sensitivity, list[dict]]:
+    """SALib's indices of each figure from the sweep's rows, and the table's rows."""
+    names = problem["names"]
     failed = sum(r["status"] != "ok" for r in rows)
     if failed == len(rows):
         raise ScenarioError(f"every sample failed ({rows[0].get('error')})"
@@ -137,15 +181,8 @@ def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str
                         "groups": len(rows) // group, "indices": indices[f],
                         "ranking": list(indices[f])} for f in figures},
     }
-    if out is not None:
-        out = Path(out)
-        write_atomic(out / "sensitivity.json", lambda f: json.dump(summary, f, indent=2))
-        from sewfmu.scenarios.design.plots import sensitivity_bars  # matplotlib: only when drawing
-
-        for f in figures:
-            sensitivity_bars(out / f"sensitivity_{_file_name(f)}.png", f, units.get(f, ""),
-                             method, [r for r in table_rows if r["figure"] == f])
-    return Sensitivity(scenario.name, method, table, indices, len(rows), failed, out, summary)
+    return Sensitivity(scenario.name, method, table, indices, len(rows), failed,
+                       Path(out) if out is not None else None, summary), table_rows
 
 
 def _table(rows: list[dict], method: str):

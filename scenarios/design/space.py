@@ -15,10 +15,17 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from sewfmu.components.parameters import did_you_mean
+from sewfmu.components.parameters import (
+    ParameterError,
+    check_value,
+    did_you_mean,
+    parameter_info,
+)
+from sewfmu.components.registry import FMUS
 from sewfmu.components.units import UnitError
 from sewfmu.scenarios.cosim.divergence import declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.format.parameter_table import range_text, slave_class
 from sewfmu.scenarios.format.quantities import in_declared_unit
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, plain, short
@@ -94,6 +101,8 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
                     f"[{'-inf' if low is None else f'{low:g}'}, "
                     f"{'inf' if high is None else f'{high:g}'}] {unit} that {inst} "
                     f"({md.modelName}) declares for {key}")
+        _accepted_by_the_model(scenario, inst, key, (("lower", lo), ("upper", hi)), where,
+                               unit)
         given = scenario.instances[inst].parameters.get(key, var.start)
         try:
             start = float(given)
@@ -102,6 +111,25 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
         start = start if lo <= start <= hi else 0.5 * (lo + hi)
         out.append(Variable(name, lo, hi, unit, start))
     return out
+
+
+def _accepted_by_the_model(scenario: Scenario, inst: str, key: str, bounds, where: str,
+                           unit: str) -> None:
+    """Each bound as a run checks the value (runs/checks.py): for sewfmu's own FMUs also the
+    sign the model allows, which the declared range cannot say (omega0 > 0 within the declared
+    [0, 2000] rad/s): a range is refused before any run, not point by point as it runs."""
+    fmu = scenario.instances[inst].fmu
+    if fmu not in FMUS or fmu in scenario.fmu_files:
+        return
+    params = slave_class(fmu).params_class
+    info = next((i for i in parameter_info(params) if i.name == key), None) if params else None
+    for which, value in bounds if info is not None else ():
+        try:
+            check_value(info, value)
+        except ParameterError:
+            raise ScenarioError(f"{where}: the {which} bound {value:g} {unit} lies outside the "
+                                f"range {range_text(info)} {unit} that {inst} ({fmu}) accepts "
+                                f"for {key}") from None
 
 
 def _bounds(spec: Any, where: str) -> tuple[Any, Any]:

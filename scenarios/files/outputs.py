@@ -8,6 +8,11 @@
   there (listed in the folder's MANIFEST), and nothing else: a user's own files in the folder stay.
   A run that fails or is interrupted (in its third [compare] variant, say) leaves the previous
   results as they were, never a mix of old and new.
+- A command that writes as it goes (a sweep, a design study: records appended run by run, then
+  its tables and pictures) follows the same rule: `refuse_theirs` before its first run (a file of
+  a name it will write that the manifest does not list is refused in one line), `claim` lists its
+  records in the manifest before it appends to them, and `replacing(folder, kept=records)` puts
+  its final files in place.
 - Temporaries carry the writing process's id in their names (".NAME.PID.tmp",
   ".sewfmu.PID.partial"). A killed process cannot clean up after itself; the next run into the
   same place removes what dead processes left (`remove_debris`).
@@ -18,6 +23,7 @@ import contextlib
 import os
 import re
 import shutil
+import threading
 from pathlib import Path
 
 try:
@@ -120,6 +126,41 @@ def _entries_of_last_run(folder: Path) -> list[str]:
             and all(part not in ("", ".", "..") for part in n.split("/"))]
 
 
+def _not_ours_error(folder: Path, theirs: list[str]) -> OutputError:
+    one = len(theirs) == 1
+    shown = ", ".join(theirs[:3]) + (" ..." if len(theirs) > 3 else "")
+    return OutputError(f"output folder {folder}: {shown} there {'is' if one else 'are'} "
+                       f"not from sewfmu's last run into it ({MANIFEST} does not list "
+                       f"{'it' if one else 'them'}), and sewfmu replaces only "
+                       f"what it wrote: give another output folder, or move "
+                       f"{'it' if one else 'them'} away")
+
+
+def refuse_theirs(folder: Path, names, ours=None) -> None:
+    """Before a command writes anything: refuse, in one line, where a file of one of `names`
+    (paths inside the folder) is there and sewfmu's last command into the folder did not write
+    it (its manifest does not list it). `ours(name)`, where given, recognizes a record of
+    sewfmu's by its content (one written before folders kept a manifest)."""
+    folder = Path(folder)
+    listed = set(_entries_of_last_run(folder))
+    theirs = [n for n in dict.fromkeys(names) if n not in listed
+              and os.path.lexists(folder / n) and not (ours is not None and ours(n))]
+    if theirs:
+        raise _not_ours_error(folder, theirs)
+
+
+def claim(folder: Path, names) -> None:
+    """List `names` in the folder's manifest, beside what it lists, before they are written in
+    place (a record appended run by run): killed half-way, the command leaves files the next one
+    knows as sewfmu's."""
+    folder = Path(folder)
+    listed = _entries_of_last_run(folder)
+    new = [n for n in dict.fromkeys(names) if n not in listed]
+    if new:
+        write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n"
+                                                                  for n in listed + new)))
+
+
 def _remove(path: Path) -> None:
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
@@ -134,10 +175,12 @@ def _files_in(folder: Path) -> list[str]:
 
 
 @contextlib.contextmanager
-def replacing(folder: Path):
+def replacing(folder: Path, kept=()):
     """Yield a staging folder; when the block succeeds its files take their places in `folder`
     (the previous run's files go, the user's other files stay, in subfolders too), when it fails
-    or is interrupted it is removed and `folder` stays as it was."""
+    or is interrupted it is removed and `folder` stays as it was. `kept`: files this command
+    wrote in place (its records, `claim`ed): listed in the manifest, neither staged nor
+    removed."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise OutputError(f"output folder {folder}: exists and is not a folder")
@@ -156,17 +199,13 @@ def replacing(folder: Path):
                 folder.rmdir()               # only if nothing else is in it
         raise
     new = _files_in(staging)
+    kept = [n for n in dict.fromkeys(kept) if n not in new and os.path.lexists(folder / n)]
     old = _entries_of_last_run(folder)
     theirs = [n for n in new if n not in old and os.path.lexists(folder / n)]
     if theirs:                               # a file sewfmu did not write is never replaced
         shutil.rmtree(staging, ignore_errors=True)
-        shown = ", ".join(theirs[:3]) + (" ..." if len(theirs) > 3 else "")
-        raise OutputError(f"output folder {folder}: {shown} there {'is' if len(theirs) == 1 else 'are'} "
-                          f"not from sewfmu's last run into it ({MANIFEST} does not list "
-                          f"{'it' if len(theirs) == 1 else 'them'}), and sewfmu replaces only "
-                          f"what it wrote: give another output folder, or move "
-                          f"{'it' if len(theirs) == 1 else 'them'} away")
-    for name in set(old) | set(new):
+        raise _not_ours_error(folder, theirs)
+    for name in (set(old) | set(new)) - set(kept):
         _remove(folder / name)
     for name in old:                         # the folders the last run made, if now empty
         for parent in (folder / name).parents:
@@ -177,7 +216,7 @@ def replacing(folder: Path):
     for name in new:
         (folder / name).parent.mkdir(parents=True, exist_ok=True)
         os.rename(staging / name, folder / name)
-    write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n" for n in new)))
+    write_atomic(folder / MANIFEST, lambda f: f.write("".join(f"{n}\n" for n in new + kept)))
     shutil.rmtree(staging, ignore_errors=True)
 
 
@@ -191,14 +230,32 @@ def folder_for(base: Path, label: str) -> Path:
     return folder
 
 
+# the folders this process holds (held): real path -> (the holding thread, how deep)
+_HELD: dict[str, tuple[int, int]] = {}
+_HELD_LOCK = threading.Lock()
+
+
 @contextlib.contextmanager
 def held(folder: Path):
     """The folder for this study or sweep alone while the block runs: a second one into it is
     refused in one line, since both would append to the same resume record and mix their lines.
     The lock is on the folder itself (flock): it leaves no file behind, and a killed process's
-    lock goes with it."""
+    lock goes with it. The thread that holds a folder may hold it again (a study holds its
+    folder from its first check to its last file, its record and its sweep inside that)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    key, me = os.path.realpath(folder), threading.get_ident()
+    with _HELD_LOCK:
+        holder, depth = _HELD.get(key, (None, 0))
+        if holder == me:
+            _HELD[key] = (me, depth + 1)
+    if holder == me:
+        try:
+            yield
+        finally:
+            with _HELD_LOCK:
+                _HELD[key] = (me, _HELD[key][1] - 1)
+        return
     if fcntl is None:
         yield
         return
@@ -211,7 +268,13 @@ def held(folder: Path):
                               f"now; "
                               f"give another output folder, or run this one when it has "
                               f"ended") from None
-        yield
+        with _HELD_LOCK:
+            _HELD[key] = (me, 1)
+        try:
+            yield
+        finally:
+            with _HELD_LOCK:
+                _HELD.pop(key, None)
     finally:
         os.close(fd)
 

@@ -39,7 +39,7 @@ def slave_class(fmu: str):
     return getattr(importlib.import_module(f"sewfmu.components.{module}"), slave)
 
 
-def _range_text(info) -> str:
+def range_text(info) -> str:
     """The range the FMU declares, with the sign it allows (a positive parameter excludes 0)."""
     low, high = info.bounds
     if info.allowed == CHOICE:
@@ -59,7 +59,7 @@ def component_rows(fmu: str, instance: str = "", given: dict | None = None) -> P
     infos = parameter_info(cls.params_class) if cls.params_class else []
     return ParameterTable(
         {"instance": instance, "parameter": i.name, "default": float(i.default),
-         "value": given.get(i.name, float(i.default)), "unit": i.unit, "range": _range_text(i),
+         "value": given.get(i.name, float(i.default)), "unit": i.unit, "range": range_text(i),
          "meaning": i.description} for i in infos)
 
 

@@ -21,7 +21,6 @@ import io
 import itertools
 import json
 import os
-import sys
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,19 +28,27 @@ from pathlib import Path
 from sewfmu.extras import require
 from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.files.outputs import (
-    OutputError,
-    drop_torn_line,
+    claim,
     folder_for,
     held,
+    refuse_theirs,
     remove_debris,
+    replacing,
     write_atomic,
 )
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
-
-POINTS_FILE = "points.jsonl"
-TABLE_FILE = "sweep.csv"
+from sewfmu.scenarios.runs.budget import product
+from sewfmu.scenarios.runs.sweep_record import (
+    POINTS_FILE,
+    TABLE_FILE,
+    finished_points,
+    is_a_sweeps,
+    open_log,
+    refuse_files_not_ours,
+    warn,
+)
 
 
 @dataclass(frozen=True)
@@ -89,6 +96,29 @@ def parse_grid_option(text: str) -> tuple[str, list]:
     if not eq or not values.strip():
         raise ScenarioError(f"--grid {text}: expected instance.parameter=v1,v2,...")
     return target.strip(), [parse_value(v.strip(), f"--grid {text}") for v in values.split(",")]
+
+
+def refuse_fixed_and_varied(fixed, varied, role: str, where: str) -> None:
+    """A parameter both given a value for every run (--set, set=) and varied (`role`: swept,
+    varied, free; `where`: the option that varies it) is refused in one line: one of the two
+    would be silently ignored."""
+    fixed_names = {str(name).strip() for name in (fixed or {})}
+    both = [str(name).strip() for name in varied if str(name).strip() in fixed_names]
+    if both:
+        raise ScenarioError(f"{both[0]} is both fixed (--set, set=) and {role} ({where}): a "
+                            f"parameter is either fixed for every run or {role}; give it in "
+                            f"one of the two")
+
+
+def count_points(scenario: Scenario, lengths: dict[str, int]) -> tuple[int, str]:
+    """How many points the scenario's [sweep] table with a grid of these lengths (parameter ->
+    number of values, added to the table's grid) makes, and what makes them, without making
+    them: a grid is checked against the bound on runs before it takes any memory."""
+    spec = scenario.sweep or {}
+    axes = {**{k: len(v) for k, v in spec.get("grid", {}).items()}, **lengths}
+    if spec.get("points") and not axes:
+        return len(spec["points"]), "the [sweep] table's points"
+    return product(axes.values()), "a grid of " + " × ".join(f"{n:,}" for n in axes.values())
 
 
 def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> list[Point]:
@@ -190,77 +220,15 @@ def _cost(scenario: Scenario, point: Point) -> float:
         return 0.0
 
 
-def warn(message: str) -> None:
-    print(f"sewfmu: warning: {message}", file=sys.stderr)
-
-
-def finished_points(out_dir: Path) -> dict[str, dict]:
-    """Points that an earlier (perhaps interrupted) run finished well, by key. Damaged lines (torn
-    by a kill, emptied, not a point) are skipped with a warning; failed points are left out, so
-    that they are tried again."""
-    done, damaged = {}, []
-    path = out_dir / POINTS_FILE
-    if not path.exists():
-        return done
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for number, line in enumerate(f, 1):
-            if not line.strip():
-                continue
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:
-                row = None
-            if not isinstance(row, dict) or not isinstance(row.get("key"), str) \
-                    or "status" not in row:
-                damaged.append(number)
-                continue
-            if row["status"] == "ok":
-                done[row["key"]] = row
-    if damaged:
-        shown = ", ".join(map(str, damaged[:10])) + (" ..." if len(damaged) > 10 else "")
-        warn(f"{path}: skipped {len(damaged)} damaged line(s) ({shown}); those points run again")
-    return done
-
-
-def _refuse_files_not_ours(out_dir: Path) -> None:
-    """A sweep appends to points.jsonl and rewrites sweep.csv: files of those names that are not
-    a sweep's (the user's own) are refused, never appended to or replaced."""
-    record, table = out_dir / POINTS_FILE, out_dir / TABLE_FILE
-    theirs = []
-    if record.is_file() and record.stat().st_size:
-        with open(record, encoding="utf-8", errors="replace") as f:
-            first = next((line for line in f if line.strip()), "")
-        try:
-            ours = isinstance(json.loads(first), dict) and "key" in json.loads(first)
-        except ValueError:
-            ours = False
-        if not ours:
-            theirs.append(POINTS_FILE)
-    if table.is_file() and table.stat().st_size:
-        with open(table, encoding="utf-8", errors="replace") as f:
-            if not f.readline().startswith("index,"):
-                theirs.append(TABLE_FILE)
-    if theirs:
-        raise OutputError(f"output folder {out_dir}: {' and '.join(theirs)} there "
-                          f"{'is' if len(theirs) == 1 else 'are'} not a sewfmu sweep's, and a "
-                          f"sweep would write into {'it' if len(theirs) == 1 else 'them'}: give "
-                          f"another output folder, or move {'it' if len(theirs) == 1 else 'them'}"
-                          f" away")
-
-
-def _open_log(path: Path):
-    """points.jsonl for appending, starting on a fresh line (after a torn last line, the next
-    row must not be glued onto it)."""
-    if path.exists():
-        drop_torn_line(path)
-    return open(path, "ab")
-
-
 def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: int | None = None,
               scheduler: str | None = None, keep_results: bool = False,
-              progress: bool = True, on_point=None) -> list[dict]:
+              progress: bool = True, on_point=None, outputs=(), finish=None) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order.
-    `on_point(row)`, if given, hears of each row as it is logged."""
+    `on_point(row)`, if given, hears of each row as it is logged. The folder's files follow
+    files/outputs.py's one rule: every file the sweep will write (its record, its table, each
+    point's results, and `outputs`, the names `finish(staging, rows)` writes at the end: the
+    pictures, a study's files) is checked before the first point runs, and a file of one of
+    those names that sewfmu did not write there is refused in one line."""
     from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
 
@@ -275,11 +243,16 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
             probe.set_value(target, value, origin=f"{scenario.source}: sweep")
         check_values(probe, paths)
     out_dir.mkdir(parents=True, exist_ok=True)
+    results = [f"points/{folder_for(Path('.'), p.label).name}/results.csv"
+               for p in points] if keep_results else []
     with held(out_dir):         # its record is this sweep's alone while it runs
         remove_debris(out_dir, recursive=True)
         settings = settings_of(scenario, paths)
         keys = {p.index: p.identity(settings) for p in points}
-        _refuse_files_not_ours(out_dir)
+        refuse_files_not_ours(out_dir)
+        refuse_theirs(out_dir, [POINTS_FILE, TABLE_FILE, *results, *outputs],
+                      lambda name: is_a_sweeps(out_dir, name))
+        claim(out_dir, [POINTS_FILE, *results])
         done = finished_points(out_dir)
         # longest first: the last points to finish are then short ones, and the workers end together
         todo = sorted((p for p in points if keys[p.index] not in done),
@@ -287,7 +260,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         results_dir = str(out_dir / "points") if keep_results else None
         rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
         bar = _progress(len(points), len(rows), progress, scenario.name)
-        with _open_log(out_dir / POINTS_FILE) as log:
+        with open_log(out_dir / POINTS_FILE) as log:
             for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
                 log.write((json.dumps(row) + "\n").encode("utf-8"))
                 log.flush()
@@ -297,7 +270,10 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
                     on_point(dict(row))
         bar.close()
         ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
-        _write_table(ordered, [name for name, _ in points[0].values], out_dir / TABLE_FILE)
+        with replacing(out_dir, kept=[POINTS_FILE, *results]) as staging:
+            _write_table(ordered, [name for name, _ in points[0].values], staging / TABLE_FILE)
+            if finish is not None:
+                finish(staging, ordered)
         return ordered
 
 

@@ -1,0 +1,115 @@
+"""How many runs a sweep or a design study may make, counted before the first one.
+
+A sweep's grid, a sensitivity analysis's samples, an optimizer's or a fit's evaluations are all
+runs, each a co-simulation: a count typed one digit too long is days of work and a table that
+grows in memory. Every one of them is counted from its settings alone (the grid's lengths, the
+samples times the group, the budget of evaluations), before any point or sample is made, and
+refused in one line over MAX_RUNS (DEFAULT_MAX_RUNS; the option --max-runs N, `max_runs=` from
+Python, or the environment's SEWFMU_MAX_RUNS raise it); under it, the count and a time
+estimate are said before the first run (`announce`).
+
+The estimate is the runs' communication steps times a cost per FMU and step (STEP_COST,
+measured: punch_drive 43 µs, take-up 45, carriage 30, feed 99 on this project's machine), plus
+a start per run, over the workers: a guide to the order of magnitude, not a promise.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import ScenarioError, plain
+
+SETTING = "SEWFMU_MAX_RUNS"
+DEFAULT_MAX_RUNS = 10_000
+RAISE_IT = f"--max-runs N, max_runs=N from Python, or {SETTING}=N"
+STEP_COST = 50e-6           # seconds per FMU and communication step (module docstring)
+START_COST = 0.05           # seconds per run: the FMUs instantiated and initialized
+POOL_START = 2.0            # seconds: worker processes started, their FMUs first loaded
+SAID_ALWAYS = 30.0          # an estimate beyond this is said even where no progress is shown
+
+
+def max_runs(given=None) -> int:
+    """The bound: `given` (the option, the argument), else SEWFMU_MAX_RUNS, else the default."""
+    if given is None:
+        text = os.environ.get(SETTING, "").strip()
+        if not text:
+            return DEFAULT_MAX_RUNS
+        try:
+            given = int(text.replace("_", ""))
+        except ValueError:
+            raise ScenarioError(f"{SETTING}={text!r}: expected a whole number of runs >= 1") \
+                from None
+        where = f"{SETTING}={text}"
+    else:
+        given, where = plain(given), "max_runs"
+    if isinstance(given, bool) or not isinstance(given, int) or given < 1:
+        raise ScenarioError(f"{where}: expected a whole number of runs >= 1, got {given!r}")
+    return given
+
+
+def seconds_per_run(scenario: Scenario) -> float | None:
+    """About how long one run of the scenario takes; None where it is not co-simulated (a
+    study's computation) or its length is not known."""
+    if scenario.study:
+        return None
+    try:
+        steps = scenario.even_steps()[0]
+    except ScenarioError:
+        return None
+    return START_COST + steps * len(scenario.instances) * STEP_COST
+
+
+def duration(seconds: float) -> str:
+    """A time as a person says it: 40 s, 12 min, 3.5 h, 6 days."""
+    if seconds < 90:
+        return f"{max(seconds, 1):.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:,.0f} days"
+
+
+def estimate(runs: int, per_run: float | None, workers: int = 1) -> str:
+    """", about 40 s on 2 workers", or nothing where a run's time is not known."""
+    if per_run is None:
+        return ""
+    parallel = max(1, min(workers, runs))
+    start = POOL_START if parallel > 1 else 0.0
+    return f", about {duration(start + runs * per_run / parallel)}" + \
+        (f" on {parallel} workers" if parallel > 1 else "")
+
+
+def check(runs: int, what: str, limit: int, cause: str, per_run: float | None = None,
+          workers: int = 1) -> None:
+    """Refuse `runs` (what `cause` makes: "16777216 samples × 3") over the bound, in one line
+    that names what makes the count and what raises the bound."""
+    if runs <= limit:
+        return
+    raise ScenarioError(f"{what}: {runs:,} runs ({cause}){estimate(runs, per_run, workers)}; "
+                        f"more than the {limit:,} a sweep or study may make: make it smaller, "
+                        f"or raise the bound ({RAISE_IT})")
+
+
+def announce(what: str, runs: int, per_run: float | None, workers: int = 1,
+             shown: bool = True, most: bool = False) -> None:
+    """The count and the estimate, one line on stderr, before the first run: where progress is
+    shown, or where it will take long."""
+    if not shown and (per_run is None or runs * per_run / max(1, min(workers, runs))
+                      < SAID_ALWAYS):
+        return
+    count = f"{'at most ' if most else ''}{runs:,} run{'s' if runs != 1 else ''}"
+    print(f"sewfmu: {what}: {count}{estimate(runs, per_run, workers)}", file=sys.stderr,
+          flush=True)
+
+
+def cpu_workers(workers: int | None) -> int:
+    """The worker processes a sweep uses: those asked for, else one per core."""
+    return workers or os.cpu_count() or 1
+
+
+def product(lengths) -> int:
+    """The number of points of a grid from its axes' lengths (no grid made)."""
+    return math.prod(lengths) if lengths else 0
