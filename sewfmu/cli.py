@@ -8,7 +8,6 @@ import argparse
 import contextlib
 import importlib
 import os
-import signal
 import sys
 import warnings
 from pathlib import Path
@@ -16,7 +15,7 @@ from pathlib import Path
 from sewfmu import api, console
 from sewfmu._version import __version__
 from sewfmu.scenarios.cosim import watchdog
-from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_sigterm
+from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_signals, pending
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
@@ -377,8 +376,7 @@ def main(argv=None) -> int:
     if args.command == "run":
         _one_blas_thread()
     # from here a signal stops the command cleanly (the start-up's handlers: sewfmu/__main__.py)
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    interrupt_on_sigterm()
+    interrupt_on_signals()
     # an FMU call that never returns: the watchdog ends this process with this command's line
     watchdog.end_process_with(lambda err: _end_stuck(err, args.command))
     # a warning (an SSP input that nothing sets) is one line, as errors are
@@ -388,6 +386,7 @@ def main(argv=None) -> int:
         args.func(args)
         sys.stdout.flush()
     except KeyboardInterrupt as err:
+        pending.clear()                     # said here: main() called by a process that goes on
         print(_interrupted_line(err, args.command), file=sys.stderr)
         return err.exit_status if isinstance(err, Interrupted) else 130
     except BrokenPipeError:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -57,14 +58,32 @@ def _mark(signum, frame) -> None:
 
 
 def _interrupt(signum, frame) -> None:
+    # noted before it is raised: raised where Python ignores exceptions (a weakref callback of
+    # an import, a __del__: "Exception ignored in ...") it would be lost, and a run started next
+    # would go on; deferred() raises it again
+    pending.append(signum)
     raise Interrupted(signum)
 
 
-def interrupt_on_sigterm() -> None:
-    """SIGTERM raises Interrupted like Ctrl-C does (Python's default would end the process
-    without cleaning up: staging folders, worker processes)."""
+def interrupt_on_signals() -> None:
+    """SIGINT and SIGTERM raise Interrupted (SIGTERM's default would end the process without
+    cleaning up: staging folders, worker processes); one raised where Python drops exceptions
+    is raised again when the next run starts."""
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _interrupt)
+        for s in SIGNALS:
+            signal.signal(s, _interrupt)
+        if not getattr(sys.unraisablehook, "keeps_interruptions", False):
+            sys.unraisablehook = _quiet(sys.unraisablehook)
+
+
+def _quiet(hook):
+    """An unraisable-exception hook that says nothing of an Interrupted Python dropped (pending
+    holds it: the one line comes when it is raised again), and passes anything else on."""
+    def keep(unraisable) -> None:
+        if not isinstance(unraisable.exc_value, Interrupted):
+            hook(unraisable)
+    keep.keeps_interruptions = True
+    return keep
 
 
 @contextlib.contextmanager
@@ -74,6 +93,7 @@ def deferred():
     if threading.current_thread() is not threading.main_thread():
         yield                    # signal handlers belong to the main thread
         return
+    raise_pending()              # one received before, and lost where it was raised
     previous = {s: signal.getsignal(s) for s in SIGNALS}
     for s in SIGNALS:
         if previous[s] is not signal.SIG_IGN:      # an ignored signal stays ignored

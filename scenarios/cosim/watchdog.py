@@ -49,6 +49,16 @@ _pipe: tuple[int, int] | None = None
 _pid = None                   # the process the pipe and the thread belong to (not a fork's)
 
 
+class Steps:
+    """A run that is not a Master's (fmpy's simulate_fmu, for a reference), as `watching` sees
+    it: its caller sets the time and the count of steps between two steps."""
+
+    _phase, recorder, scenario = "step", None, None
+
+    def __init__(self, t: float = 0.0):
+        self.t, self.k = t, 0
+
+
 def end_process_with(end) -> None:
     """This process is sewfmu's own: `end(err)` prints what the owner prints for the Interrupted
     or StepTimeout `err` and ends the process (os._exit). (A hook that returns leaves the run to
@@ -91,8 +101,8 @@ def watching(master):
         yield
         return
     _start()
-    # the byte Python's C-level handler writes here wakes the watchdog, wherever the main
-    # thread is (it needs no byte of its own: interrupt.pending holds the signal)
+    # Python's C-level handler writes the signal's number here: it wakes the watchdog wherever
+    # the main thread is (the handler that marks interrupt.pending runs only between bytecodes)
     previous = signal.set_wakeup_fd(_pipe[1], warn_on_full_buffer=False)
     with _lock:
         _run, _timeout = master, getattr(master.scenario, "step_timeout", None)
@@ -222,11 +232,11 @@ def _interrupted(run, err: Interrupted) -> Interrupted:
         return err
     inst, call = stuck_call()
     phase = getattr(run, "_phase", "loading")
-    if phase == "loading" or run.recorder is None:
-        err.where = f"while {inst} was in {call}" if inst else "while loading the FMUs"
+    at = f" at t = {run.t:g} s" if phase in ("initialization", "step") else ""
+    if inst:
+        err.where = f"while {inst} was in {call}{at}"
     else:
-        err.where = f"while {inst} was in {call} at t = {run.t:g} s" if inst else \
-            f"at t = {run.t:g} s"
+        err.where = at.strip() if phase == "step" else "while loading the FMUs"
     err.result = _record_of(run)
     return err
 
@@ -271,17 +281,23 @@ _NAMES = {"_do_step": "doStep", "do_step": "doStep", "instantiate": "instantiate
 
 def stuck_call(thread: threading.Thread | None = None) -> tuple[str | None, str | None]:
     """(instance name, FMI call) the thread (the main thread) is in now, from its Python stack:
-    the innermost frame of an Instance's method (an FMU's own Python code runs above it); (None,
-    None) where it is in no FMU call."""
-    # loaded with the first run (an FMU call needs it), never by this module: see its imports
-    instances = sys.modules.get("sewfmu.scenarios.cosim.instances")
-    if instances is None:
-        return None, None
+    the innermost frame of a method of sewfmu's Instance or of fmpy's FMU object (an FMU's own
+    Python code runs above it); (None, None) where it is in no FMU call."""
+    # loaded with the first FMU (a call needs them), never by this module: see its imports
+    instance = getattr(sys.modules.get("sewfmu.scenarios.cosim.instances"), "Instance", None)
+    fmpy_fmu = getattr(sys.modules.get("fmpy.fmi1"), "_FMU", None)
     ident = (thread or threading.main_thread()).ident
     frame = sys._current_frames().get(ident)
-    while frame is not None:
+    while frame is not None and (instance or fmpy_fmu):
         inst = frame.f_locals.get("self")
-        if isinstance(inst, instances.Instance):
+        if fmpy_fmu and isinstance(inst, fmpy_fmu):
+            if frame.f_code.co_name == "_call":   # fmpy's call of any function: fmi2DoStep
+                name = str(frame.f_locals.get("fname", "an FMI call"))
+                if name[:4] in ("fmi2", "fmi3"):   # as the calls are named elsewhere: doStep
+                    name = name[4].lower() + name[5:]
+                return str(inst.instanceName), name
+            return str(inst.instanceName), frame.f_code.co_name     # its methods' FMI names
+        if instance and isinstance(inst, instance):
             name = frame.f_code.co_name
             if name == "_call":
                 return inst.name, str(frame.f_locals.get("what", "an FMI call"))

@@ -181,6 +181,7 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
     from fmpy import simulate_fmu  # fmpy: only when an FMU file is read
 
+    from sewfmu.scenarios.cosim import interrupt, watchdog  # loaded on first use (start-up time)
     from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status  # loaded on first use (start-up time)
     from sewfmu.scenarios.cosim.instances import open_instance  # loaded on first use (start-up time)
 
@@ -190,12 +191,23 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     wanted = [v for v in (variables or [v.name for v in instance.md.modelVariables
                                         if v.causality == "output"]) if v in known]
     instance.prepare()
+    # Ctrl-C stops the run between two steps, as a scenario's; a call that never returns is the
+    # watchdog's (any FMU, a supplier's too)
+    steps = watchdog.Steps(experiment.start)
+
+    def step_finished(time: float, recorder) -> bool:
+        steps.t, steps.k = time, steps.k + 1
+        interrupt.raise_pending()
+        return True
+
     try:
         instance.instantiate()
-        result = simulate_fmu(str(fmu), start_time=experiment.start, stop_time=experiment.stop,
-                              output_interval=experiment.step, step_size=experiment.step,
-                              input=experiment.inputs, output=wanted, validate=False,
-                              fmu_instance=instance.fmu, terminate=False)
+        with interrupt.deferred(), watchdog.watching(steps):
+            result = simulate_fmu(str(fmu), start_time=experiment.start,
+                                  stop_time=experiment.stop, output_interval=experiment.step,
+                                  step_size=experiment.step, input=experiment.inputs,
+                                  output=wanted, validate=False, fmu_instance=instance.fmu,
+                                  terminate=False, step_finished=step_finished)
     except Exception as err:      # noqa: BLE001 - a failed run is a finding, said in one line
         # after Fatal (fmpy's own calls raise fmpy's exception) no call may follow, not even
         # freeing the instance

@@ -1,7 +1,8 @@
 """FMUs whose doStep never returns, run by `sewfmu` in a subprocess: a Python FMU (pythonfmu, as
 a third party writes one) asleep or spinning in pure Python, and a C FMU spinning in `for (;;);`
 (its ctypes call holds the main thread, where Python's signal handlers would run). Ctrl-C or
-SIGTERM ends the run, a sweep (its worker processes too) within 2 s with exit status 130 or 143
+SIGTERM ends the run, a sweep (its worker processes too), the check of an FMU against its
+references within 2 s with exit status 130 or 143
 and one line naming the instance, the FMI call and the time; experiment.step_timeout refuses the
 step. The record so far is kept, and checked against the closed forms x = t (the hanging FMU)
 and phi = omega0·t (the MainShaft beside it)."""
@@ -88,7 +89,17 @@ def fmus(tmp_path_factory):
             spin = foreign_fmus.build_gain(c_folder)
         finally:
             foreign_fmus.GAIN_C = saved
-    return {"hang": hang, "spin": spin}
+    # the same, hanging with its defaults in its default experiment: for `sewfmu references`
+    now = folder / "now"
+    now.mkdir()
+    (now / "hang_now.py").write_text(
+        HANG_PY.replace("class Hang(Fmi2Slave):", "class HangNow(Fmi2Slave):\n"
+                        "    default_experiment = DefaultExperiment(0.0, 1.0, 0.0025)")
+        .replace("import Fmi2Causality", "import DefaultExperiment, Fmi2Causality")
+        .replace("self.hang_at, self.mode, self.x = 1e9,", f"self.hang_at, self.mode, self.x = "
+                                                          f"{HANG_AT},"))
+    hang_now = Path(FmuBuilder.build_FMU(now / "hang_now.py", dest=now))
+    return {"hang": hang, "spin": spin, "hang_now": hang_now}
 
 
 def _scenario(folder: Path, fmus: dict, mode: int = 0, spin: bool = False) -> Path:
@@ -213,6 +224,21 @@ def _spinning(pid: int) -> bool:
 
 
 _spinning.seen = {}
+
+
+def test_a_signal_ends_the_reference_run_of_any_fmu_stuck_in_a_call(tmp_path, fmus):
+    """`sewfmu references --fmu` runs a supplier's FMU through fmpy's simulate_fmu: the same way
+    out."""
+    refs = tmp_path / "refs"
+    proc, marker = _start(tmp_path, "references", "--fmu", str(fmus["hang_now"]), "--refs",
+                          str(refs), "--regenerate")
+    _when_stuck(proc, marker)
+    err, took = _signal_and_wait(proc, signal.SIGINT)
+    assert proc.returncode == 130, err
+    assert took < WITHIN, took
+    assert err.splitlines() == [f"sewfmu: interrupted (SIGINT) while reference was in doStep at "
+                                f"t = {HANG_AT:g} s; nothing of the interrupted run was written"]
+    assert not refs.exists() or not list(refs.rglob("*.csv"))
 
 
 def test_a_step_beyond_step_timeout_is_refused_with_the_record_kept(tmp_path, fmus):

@@ -5,6 +5,7 @@ and a sweep's worker give it to end their process) records what it was handed in
 pytest. The records are checked against the closed form x = u·t of a fake integrator."""
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -195,3 +196,39 @@ def test_step_timeout_changes_no_sweep_point_identity():
     before = experiment_of(sc)
     sc.set_value("experiment.step_timeout", 5)
     assert experiment_of(sc) == before and "step_timeout" not in before
+
+
+def test_an_interruption_python_drops_is_raised_again_by_the_next_run(capsys):
+    """Ctrl-C landing in a weakref callback (importlib has them) is printed as "Exception
+    ignored" and lost: the run started next would reach an FMU that never returns with no
+    interruption to answer. The command line's handlers note it first; the run raises it."""
+    import weakref
+
+    before = {s: signal.getsignal(s) for s in interrupt.SIGNALS}
+    hook = sys.unraisablehook
+    try:
+        interrupt.interrupt_on_signals()
+
+        class Thing:
+            pass
+
+        def callback(_):
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):        # the handler runs here, between two bytecodes
+                pass
+
+        thing = Thing()
+        ref = weakref.ref(thing, callback)
+        del thing                     # the callback runs, the KeyboardInterrupt is dropped
+        assert ref() is None and interrupt.pending == [signal.SIGINT]
+        model = Blocking(at=10.0)
+        with pytest.raises(interrupt.Interrupted) as caught:
+            _run(model).run()
+        assert caught.value.where == "while loading the FMUs"
+        assert not model.blocked.is_set() and interrupt.pending == []
+        assert "Exception ignored" not in capsys.readouterr().err
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)
+        sys.unraisablehook = hook
+        interrupt.pending.clear()
