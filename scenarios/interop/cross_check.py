@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.interop.hosts import run_in_host
 from sewfmu.scenarios.interop.ssp_export import export
+from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.runs.results import write_csv, write_json
 from sewfmu.scenarios.runs.runner import simulate, summarize
 

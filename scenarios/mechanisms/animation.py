@@ -78,14 +78,7 @@ def animate(result, path: Path) -> Animation:
     from PIL import Image  # pillow: only when animating
 
     plt = pyplot()          # matplotlib, its files out of the user's home
-
-    kind = result.scenario.analysis
-    drawing = mechanism(kind).animation if kind else None
-    if drawing is None:
-        animated = [name for name, m in mechanisms().items() if m.animation]
-        raise RoleError(f"no animation for the {kind!r} analysis "
-                                 f"(animated: {', '.join(animated)})")
-    scene = importlib.import_module(f"{__name__}.{drawing}").Scene(result)
+    scene = _scene(result)
     samples = frame_samples(column(result, "shaft", "phi"))
     fig, ax = plt.subplots(figsize=SIZE_IN, dpi=DPI)
     images, tracked = [], []

@@ -4,10 +4,10 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult, run
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.mechanisms.base import MissingRecord
 
 
 def simulate(scenario: Scenario, fmu_dir: Path | None = None) -> RunResult:

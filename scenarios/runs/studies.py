@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sewfmu.scenarios.mechanisms.base import Study
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.mechanisms.base import Study
 
 
 def study_of(scenario: Scenario) -> Study:
