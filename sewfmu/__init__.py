@@ -12,7 +12,7 @@ import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first
 from sewfmu._version import __version__
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "check", "build", "show", "parameters",
-           "scenarios",
+           "scenarios", "read_value",
            "Run", "Sweep", "Scenario", "Instance", "Connection", "Error", "ScenarioError",
            "CosimError", "OutputError",
            "Diverged", "MissingExtra", "optimize", "fit", "sensitivity", "app"]
@@ -20,8 +20,8 @@ __all__ = ["__version__", "run", "sweep", "compare", "load", "check", "build", "
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
 _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "check", "build", "show",
-                                            "parameters", "Run", "Sweep", "Scenario", "ScenarioError",
-                                            "InaccurateRun")},
+                                            "parameters", "read_value", "Run", "Sweep", "Scenario",
+                                            "ScenarioError", "InaccurateRun")},
          "Error": "sewfmu.errors",
          # to build a scenario in Python (docs/scenarios.md)
          "Instance": "sewfmu.scenarios.format.scenario",

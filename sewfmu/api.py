@@ -20,20 +20,28 @@ from pathlib import Path
 from typing import Any, Callable, Mapping
 
 from sewfmu.errors import Error
-from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.loader import catalogue
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError, plain
+from sewfmu.scenarios.format.value_lists import grid_values
+from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain
+from sewfmu.scenarios.mechanisms.base import figures_of
 
-__all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "scenarios", "Run",
-           "Sweep", "Scenario", "ScenarioError"]
+__all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "scenarios",
+           "read_value", "Run", "Sweep", "Scenario", "ScenarioError"]
 
 
 def scenarios() -> list[str]:
     """The names of the catalogue's scenarios."""
     return sorted(catalogue())
+
+
+def read_value(text: str) -> Any:
+    """A value typed as text, as `--set` reads it: a number, true or false or a quoted string
+    (TOML's scalars), else the text itself, a value with its unit for `set=` ("955 rpm"). A form
+    reads what a user typed with it (docs/scenarios.md, "Values with units")."""
+    return parse_value(text, "value")
 
 
 def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
@@ -158,8 +166,8 @@ class Run:
         numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
         [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
         point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
-        from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
         from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
+        from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
 
         if self.scenario is None or self.series is None:
             raise ScenarioError(f"{self.name}: no recorded run to draw (a [compare] run: take "
@@ -348,12 +356,12 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         raise ScenarioError(f"workers: expected a whole number >= 1, got {workers!r}")
     out = _folder(out, "out")
     # counted from the axes' lengths, before a value list or a point is made
-    count, cause = count_points(sc, {k: _length(v, k) for k, v in grid.items()})
+    count, cause = count_points(sc, {k: _length(v, f"grid {k}") for k, v in grid.items()})
     per_run = budget.seconds_per_run(sc) if scheduler is None else None
     parallel = budget.cpu_workers(workers)
     budget.check(count, f"sweep {sc.name}", budget.max_runs(max_runs), cause, per_run, parallel)
     budget.announce(f"sweep {sc.name}", count, per_run, parallel, shown=bool(progress))
-    grid = {k: _values_of(k, v) for k, v in grid.items()}
+    grid = {k: grid_values(v, f"grid {k}") for k, v in grid.items()}
     points = points_of(sc, grid)
     swept = [name for name, _ in points[0].values]
     if (plot or report) and out is None:
@@ -385,21 +393,10 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
 
 
-def _values_of(name, values) -> list:
-    """A grid's values as a list: a list, tuple, range, numpy array or any other iterable of
-    values, or one value; numpy numbers as Python numbers."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
-        values = [values]
-    values = [plain(v) for v in (values.tolist() if hasattr(values, "tolist") else values)]
-    if not values:
-        raise ScenarioError(f"grid: {name} has no values")
-    return values
-
-
-def _length(values, name) -> int:
+def _length(values, where: str) -> int:
     """How many values a grid gives a parameter, without a copy of them where they say it."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
-        return len(_values_of(name, values))        # one value, a generator
+    if isinstance(values, str) or not hasattr(values, "__len__"):
+        return len(grid_values(values, where))      # a text list, one value, a generator
     return len(values)
 
 

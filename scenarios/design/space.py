@@ -1,8 +1,9 @@
 """What a design study varies and what it asks of the key figures.
 
 A variable is an `instance.parameter` between two bounds, written as --set writes a value
-("800..1200 rpm", "15..40", (0.01, "12 mm")), converted into the unit its FMU declares and
-checked against the range the FMU declares, before anything runs. A goal (minimize, maximize,
+("800..1200 rpm", "15..40", ("10 mm", "12 mm"), (0.01, 0.012); a unit after the upper bound
+applies to both, format/value_lists.py), converted into the unit its FMU declares and checked
+against the range the FMU declares, before anything runs. A goal (minimize, maximize,
 a target) and constraints (`F2_peak<=25 N`) name key figures of the scenario's analysis, with
 their values in any unit that fits the figure's.
 """
@@ -28,11 +29,9 @@ from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.format.parameter_table import range_text, slave_class
 from sewfmu.scenarios.format.quantities import in_declared_unit
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.value_lists import check_units_agree, range_in_text
 from sewfmu.scenarios.format.values import ScenarioError, plain, short
 
-_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-# "LO..HI unit", "LO unit..HI unit": the first ".." that is not inside a number splits it
-_RANGE = re.compile(rf"^\s*({_NUMBER})\s*([^\s\d.+-]\S*?)?\s*\.\.\s*({_NUMBER})\s*(\S+)?\s*$")
 _CONSTRAINT = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|>=)\s*(\S.*?)\s*$")
 _TARGET = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(\S.*?)\s*$")
 # a constraint's margin (relative to its bound) that still counts as met: what SLSQP leaves
@@ -134,18 +133,12 @@ def _accepted_by_the_model(scenario: Scenario, inst: str, key: str, bounds, wher
 
 def _bounds(spec: Any, where: str) -> tuple[Any, Any]:
     """The two bounds as --set takes values: numbers, or strings with their units."""
-    if isinstance(spec, str):
-        match = _RANGE.match(spec)
-        if match is None:
-            raise ScenarioError(f"{where}={spec}: expected LO..HI with an optional unit, like "
-                                f"\"800..1200 rpm\" or \"15..40\"")
-        lo, lo_unit, hi, hi_unit = match.groups()
-        lo_unit, hi_unit = lo_unit or hi_unit, hi_unit or lo_unit      # "800..1200 rpm"
-        return (f"{lo} {lo_unit}" if lo_unit else float(lo),
-                f"{hi} {hi_unit}" if hi_unit else float(hi))
+    if isinstance(spec, str):             # "800..1200 rpm": the rule of lists (value_lists.py)
+        return range_in_text(spec, where)
     if isinstance(spec, np.ndarray) and spec.ndim == 1:        # np.array([lo, hi]): numbers
         spec = spec.tolist()
     if isinstance(spec, (tuple, list)) and len(spec) == 2:
+        check_units_agree(list(spec), where)
         return spec[0], spec[1]
     raise ScenarioError(f"{where}: expected (low, high) or \"LO..HI unit\", got {short(spec)}")
 

@@ -62,6 +62,11 @@ def load(name_or_path: str) -> Scenario:
     except RecursionError:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario (tables or arrays "
                             f"within each other hundreds of levels deep)") from None
+    except ScenarioError:       # _text_of's, itself a ValueError
+        raise
+    except ValueError:          # tomllib's int(): Python reads at most 4300 digits
+        raise ScenarioError(f"{path}: an integer of more than 4300 digits, beyond the range of "
+                            f"any value") from None
     except OSError as err:
         raise ScenarioError(f"{path}: cannot read: {err.strerror or err}") from None
     scenario = from_dict(data, path.stem, str(path))

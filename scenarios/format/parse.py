@@ -11,7 +11,7 @@ from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.fmu_file import check_parameter, fmu_path, is_fmu_file, read_fmu
 from sewfmu.scenarios.format.master_settings import MASTER_NAMES
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
-from sewfmu.scenarios.mechanisms import RoleError, mechanism
+from sewfmu.scenarios.format.value_lists import check_units_agree, grid_values
 from sewfmu.scenarios.format.values import (
     ScenarioError,
     check_instance_name,
@@ -20,6 +20,7 @@ from sewfmu.scenarios.format.values import (
     seconds,
     short,
 )
+from sewfmu.scenarios.mechanisms import RoleError, mechanism
 
 
 def _table(data: dict, key: str, where: str, required: bool = True) -> dict:
@@ -184,6 +185,7 @@ def _check_compare(scenario: Scenario, source: str) -> None:
     if unknown:
         raise ScenarioError(f"{source}: unknown key compare.{sorted(unknown)[0]} "
                             f"(known: parameter, values)")
+    check_units_agree(cmp["values"], f"{source}: compare.values")
     labels = [label_of(cmp["parameter"], v) for v in cmp["values"]]
     twice = sorted({label for label in labels if labels.count(label) > 1})
     if twice:
@@ -217,8 +219,12 @@ def _check_sweep(sweep: Any, source: str) -> None:
         raise ScenarioError(f"{source}: [sweep] takes grid = {{ \"instance.parameter\" = [...] }} "
                             f"or [[sweep.points]]")
     grid = sweep.get("grid", {})
-    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
-        raise ScenarioError(f"{source}: sweep.grid: each parameter needs a non-empty list of values")
+    if not isinstance(grid, dict) or not all(isinstance(v, (list, str)) and v
+                                             for v in grid.values()):
+        raise ScenarioError(f"{source}: sweep.grid: each parameter needs a non-empty list of "
+                            f"values, or a text like \"100, 200, 300 rpm\"")
+    for name, values in grid.items():   # "100, 200 rpm": the list it is (value_lists.py)
+        grid[name] = grid_values(values, f"{source}: sweep.grid.{name}")
     points = sweep.get("points", [])
     if not isinstance(points, list) or not all(isinstance(p, dict) and p for p in points):
         raise ScenarioError(f"{source}: sweep.points must be tables of instance.parameter = value")

@@ -44,7 +44,10 @@ def label_of(target: str, value: Any) -> str:
 
 def short(value: Any) -> str:
     """A value for a message: huge integers cut to their first and last digits."""
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:          # an int beyond Python's 4300 digits for its text
+        return f"an integer of about {int(value.bit_length() * 0.30103)} digits"
     return text if len(text) <= 40 else f"{text[:12]}...{text[-6:]} ({len(text)} digits)"
 
 
@@ -81,12 +84,18 @@ def positive_in(value: Any, unit: str, where: str) -> float:
 
 
 def parse_value(text: str, where: str) -> Any:
-    """A --set value: a TOML scalar (number or string)."""
+    """A value typed as text (--set, --grid, the page): a TOML scalar (a number, true or false,
+    a quoted string), else the text itself: a value with its unit ("955 rpm", read by
+    format/quantities.py) or a word, for the caller to say what it expected."""
+    if not isinstance(text, str):
+        raise ScenarioError(f"{where}: expected a text, got {type(text).__name__}")
+    if "\n" in text or "\r" in text:   # one value is one line ("1\nx = 2" is TOML's 1 and more)
+        return text
     try:
         return tomllib.loads(f"v = {text}")["v"]
     except RecursionError:
         raise ScenarioError(f"{where}: nested too deeply to be a value") from None
-    except tomllib.TOMLDecodeError:
+    except ValueError:        # not TOML, or an integer beyond Python's 4300 digits
         if text.lower() in ("nan", "+nan", "-nan", "inf", "+inf", "-inf"):
             return float(text)
         return text           # a bare word: let the caller say what it expected

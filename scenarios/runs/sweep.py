@@ -38,7 +38,8 @@ from sewfmu.scenarios.files.outputs import (
 )
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError, label_of, parse_value
+from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
+from sewfmu.scenarios.format.values import ScenarioError, label_of
 from sewfmu.scenarios.runs.budget import product
 from sewfmu.scenarios.runs.sweep_record import (
     POINTS_FILE,
@@ -91,11 +92,12 @@ def grid_points(grid: dict[str, list]) -> list[Point]:
 
 
 def parse_grid_option(text: str) -> tuple[str, list]:
-    """`instance.parameter=v1,v2,...` from the command line."""
+    """`instance.parameter=v1,v2,... unit` from the command line (a unit after the last value
+    applies to all: format/value_lists.py)."""
     target, eq, values = text.partition("=")
     if not eq or not values.strip():
         raise ScenarioError(f"--grid {text}: expected instance.parameter=v1,v2,...")
-    return target.strip(), [parse_value(v.strip(), f"--grid {text}") for v in values.split(",")]
+    return target.strip(), values_in_text(values, f"--grid {target.strip()}")
 
 
 def refuse_fixed_and_varied(fixed, varied, role: str, where: str) -> None:
@@ -124,8 +126,10 @@ def count_points(scenario: Scenario, lengths: dict[str, int]) -> tuple[int, str]
 def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> list[Point]:
     """The points of a scenario's [sweep] table, or of the grid given on the command line."""
     spec = scenario.sweep or {}
-    grid = dict(spec.get("grid", {}))
-    grid.update(extra_grid or {})
+    grid = {name: grid_values(values, f"{scenario.source}: sweep.grid.{name}")
+            for name, values in spec.get("grid", {}).items()}
+    grid.update({name: grid_values(values, f"grid {name}")
+                 for name, values in (extra_grid or {}).items()})
     if grid and spec.get("points"):
         raise ScenarioError(f"{scenario.source}: [sweep] has both grid and points; give one")
     if spec.get("points"):

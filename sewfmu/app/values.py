@@ -18,10 +18,11 @@ EXPERIMENT = {"revolutions": ("rev", "shaft revolutions to run"),
 
 
 def value_of(text: str) -> Any:
-    """A typed value as `--set` reads it: a TOML scalar, else the text (a value with its unit)."""
+    """A typed value as `--set` reads it (sewfmu.read_value): a TOML scalar, else the text (a
+    value with its unit)."""
     try:
-        value = tomllib.loads(f"v = {text}")["v"]
-    except (tomllib.TOMLDecodeError, RecursionError):
+        value = sewfmu.read_value(text)
+    except sewfmu.Error:              # nested too deeply: the text, which check() refuses
         return text
     return value if isinstance(value, (int, float, bool, str)) else text
 
