@@ -16,7 +16,6 @@ import os
 from functools import partial
 from pathlib import Path
 
-from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2Boolean, fmi2Real, fmi2ValueReference
 from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
@@ -31,6 +30,7 @@ from sewfmu.scenarios.cosim.fmi_calls import (
 )
 from sewfmu.scenarios.cosim.fmu_cache import extract_cached, is_cached
 from sewfmu.scenarios.cosim.pythonfmu_host import instantiating, release_at_exit
+from sewfmu.scenarios.format.fmu_file import check_binary, model_description
 from sewfmu.scenarios.format.values import ScenarioError
 
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
@@ -44,8 +44,12 @@ def extracted_fmu(path: Path) -> tuple[str, object]:
     stat = path.stat()
     key = (str(path.resolve()), stat.st_size, stat.st_mtime_ns)
     if key not in _EXTRACTED:
-        unzip_dir = extract_cached(path)
-        _EXTRACTED[key] = (unzip_dir, read_model_description(str(path)))
+        # its description and its library for this platform checked before anything is
+        # unpacked or loaded: one line naming what is missing, not fmpy's "instantiate
+        # returned FATAL"
+        md = model_description(path, "")
+        check_binary(path, md)
+        _EXTRACTED[key] = (extract_cached(path), md)
     return _EXTRACTED[key]
 
 

@@ -12,6 +12,9 @@ checked against its modelDescription before anything runs.
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
+import zipfile
+import zlib
 from pathlib import Path
 
 from sewfmu.components.parameters import did_you_mean
@@ -36,15 +39,57 @@ def fmu_path(text: str, base: Path, where: str) -> Path:
     return path
 
 
-def read_fmu(path: Path, where: str):
-    """The modelDescription of a co-simulation FMU of FMI 2.0 or 3.0, or one ScenarioError."""
+def model_description(path: Path, where: str, validate: bool = True):
+    """fmpy's modelDescription of an FMU file, or one ScenarioError naming what is wrong: not a
+    zip archive, no modelDescription.xml in it, one that is not XML, or not an FMI model
+    description. Every reader of an FMU file's modelDescription calls this one."""
     from fmpy import read_model_description  # fmpy: only when an FMU file is read
 
+    path = Path(path)
+    name = f"{where}: {path.name}" if where else path.name
     try:
-        md = read_model_description(str(path))
+        with zipfile.ZipFile(path) as archive:
+            listed = archive.namelist()
+            if "modelDescription.xml" not in listed:
+                shown = ", ".join(listed[:3]) + (", ..." if len(listed) > 3 else "")
+                raise ScenarioError(f"{name} is not an FMU: it has no modelDescription.xml (it "
+                                    f"holds: {shown or 'nothing'})")
+            root, why = _root_tag(archive)
+    except (zipfile.BadZipFile, EOFError):
+        raise ScenarioError(f"{name} is not an FMU: not a zip archive") from None
+    except OSError as err:
+        raise ScenarioError(f"{name}: cannot read: {err.strerror or err}") from None
+    if root is None:
+        raise ScenarioError(f"{name}: its modelDescription.xml is not XML ({why})")
+    if root != "fmiModelDescription":
+        raise ScenarioError(f"{name}: its modelDescription.xml is no FMI model description (its "
+                            f"root element is <{root[:40]}>, not <fmiModelDescription>)")
+    try:
+        return read_model_description(str(path), validate=validate)
     except Exception as err:            # noqa: BLE001 - any unreadable FMU is one message
-        raise ScenarioError(f"{where}: {path.name} is not a readable FMU "
-                            f"({' '.join(str(err).split())})") from None
+        said = " ".join(str(err).split())
+        raise ScenarioError(f"{name} is not a readable FMU ({type(err).__name__}: "
+                            f"{said[:300]}{'...' if len(said) > 300 else ''})") from None
+
+
+def _root_tag(archive: zipfile.ZipFile) -> tuple[str | None, str]:
+    """The name of modelDescription.xml's root element (no namespace), or None and why it is no
+    XML; only the bytes up to the root element are read."""
+    try:
+        with archive.open("modelDescription.xml") as xml:
+            for _, element in ET.iterparse(xml, events=("start",)):
+                return element.tag.rpartition("}")[2], ""
+    except ET.ParseError as err:
+        return None, " ".join(str(err).split())
+    except (zipfile.BadZipFile, EOFError, RuntimeError, zlib.error, NotImplementedError,
+            UnicodeError, ValueError) as err:
+        return None, f"a damaged member: {' '.join(str(err).split())[:200]}"
+    return None, "no element"
+
+
+def read_fmu(path: Path, where: str):
+    """The modelDescription of a co-simulation FMU of FMI 2.0 or 3.0, or one ScenarioError."""
+    md = model_description(path, where)
     if not str(md.fmiVersion).startswith(("2.", "3.")):
         raise ScenarioError(f"{where}: {path.name} is an FMI {md.fmiVersion} FMU; sewfmu runs "
                             f"FMI 2.0 and 3.0 co-simulation FMUs")
@@ -84,3 +129,36 @@ def check_parameter(md, key: str, value, where: str) -> None:
         if number is not None and limit(float(value), number):
             raise ScenarioError(f"{where}: {key} = {value!r} {unit_of(v)} is outside the range "
                                 f"{md.modelName} declares ({bound} {number:g})")
+
+
+def check_binary(path: Path, md, where: str = "") -> None:
+    """An FMU runs here only with the library of its modelIdentifier for this platform
+    (binaries/linux64/X.so in FMI 2.0, binaries/x86_64-linux/X.so in 3.0): refused before it is
+    loaded, naming the platforms it has, instead of fmpy's "instantiate returned FATAL"."""
+    import fmpy  # fmpy: only when an FMU file is run
+
+    path = Path(path)
+    name = f"{where}: {path.name}" if where else path.name
+    fmi3 = str(md.fmiVersion).startswith("3")
+    here = fmpy.platform_tuple if fmi3 else fmpy.platform
+    identifier = md.coSimulation.modelIdentifier if md.coSimulation is not None else md.modelName
+    library = f"{identifier}{fmpy.sharedLibraryExtension}"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            listed = archive.namelist()
+    except (zipfile.BadZipFile, EOFError, OSError) as err:
+        raise ScenarioError(f"{name}: cannot read the archive ({err})") from None
+    platforms = sorted({n.split("/")[1] for n in listed
+                        if n.startswith("binaries/") and n.count("/") >= 2 and n.split("/")[2]})
+    if here not in platforms:
+        has = ", ".join(platforms) or ("none: source code only" if any(
+            n.startswith("sources/") for n in listed) else "none")
+        raise ScenarioError(f"{name} has no binary for {here}, the platform sewfmu runs on (it "
+                            f"has: {has}); run it where one of those is, or export it from its "
+                            f"tool with a {here} binary")
+    if f"binaries/{here}/{library}" not in listed:
+        files = sorted(n.rpartition("/")[2] for n in listed if n.startswith(f"binaries/{here}/")
+                       and not n.endswith("/"))
+        raise ScenarioError(f"{name} has binaries/{here}/ but not {library}, the library of its "
+                            f"modelIdentifier {identifier!r} (it has: {', '.join(files[:6])}"
+                            f"{', ...' if len(files) > 6 else ''}); the FMU is incomplete")

@@ -14,6 +14,7 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.format.declared_units import parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import ScenarioError, plain, positive, positive_in, short
 from sewfmu.scenarios.mechanisms import Mechanism, RoleError, mechanism
@@ -289,8 +290,6 @@ class Scenario:
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:
     """name -> unit of the parameters and inputs of an FMU file (from another tool)."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
-    md = read_model_description(str(fmu_file))
+    md = model_description(fmu_file, "")
     return {v.name: v.unit or "" for v in md.modelVariables
             if v.causality in ("parameter", "input")}

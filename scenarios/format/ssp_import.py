@@ -28,6 +28,7 @@ from xml.etree import ElementTree as ET
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.parse import check_one_source, check_record
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
 from sewfmu.scenarios.format.values import ScenarioError, check_instance_name, parse_value
@@ -191,14 +192,8 @@ def _fmu_type(fmu: Path, files: dict[str, Path], versions: dict[str, str], where
               component: str) -> str:
     """The FMU's modelName (made unique if two different files share one); its fmiVersion put
     into `versions`."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
-    try:
-        md = read_model_description(str(fmu))
-        name = md.modelName
-    except Exception as err:            # noqa: BLE001 - any unreadable FMU is one message
-        raise ScenarioError(f"{where}: component {component}: {fmu.name} is not a readable FMU "
-                            f"({' '.join(str(err).split())})") from None
+    md = model_description(fmu, f"{where}: component {component}")
+    name = md.modelName
     kind, k = name, 1
     while kind in files and files[kind] != fmu:
         k += 1

@@ -43,6 +43,7 @@ from sewfmu.scenarios.cosim.system import check_parameters
 from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.fmu_build.sources import current_version
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names
+from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
@@ -53,7 +54,6 @@ _FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
 def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
                fmi: int = 2) -> Path:
     """Write the scenario as one co-simulation FMU (FMI 2.0, or 3.0) to `output`."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
     from fmpy.container_fmu.cli import create_container_fmu  # fmpy: only when an FMU file is read
     from fmpy.container_fmu.config import (  # fmpy: only when an FMU file is read
         Component,
@@ -72,7 +72,7 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
     n, h = scenario.even_steps()
     stop = scenario.end_time()
     inside = _components_inside(scenario, fmu_paths)
-    described = {name: read_model_description(str(path), validate=False)
+    described = {name: model_description(path, "", validate=False)
                  for name, path in inside.items()}
     # what `sewfmu run` refuses before any FMU runs, then what it refuses running
     check_parameters(scenario, {i.name: described[i.fmu] for i in scenario.instances.values()})
@@ -109,12 +109,10 @@ def _components_inside(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict[s
     FMI 3.0 build of a sewfmu FMI 2.0 FMU (built beside it, in fmi3/, where missing). An FMI 2.0
     FMU of pythonfmu's crashes the container's host at its first log line with logging on (see
     the module docstring): one of another version of sewfmu, or not sewfmu's, is refused."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
     inside = {}
     for name in sorted({inst.fmu for inst in scenario.instances.values()}):
         path = Path(fmu_paths[name])
-        md = read_model_description(str(path), validate=False)
+        md = model_description(path, "", validate=False)
         if md.fmiVersion.startswith("3") or \
                 not (md.generationTool or "").startswith("PythonFMU"):
             inside[name] = path

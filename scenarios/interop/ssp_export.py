@@ -14,13 +14,12 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
-from fmpy import read_model_description
-
 from sewfmu.components.units import UNITS
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
+from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.ssp_import import ANNOTATION, SEWFMU
 
@@ -51,7 +50,7 @@ def system_structure(scenario: Scenario, fmu_paths: dict[str, Path]) -> ET.Eleme
     elements = ET.SubElement(system, _q(SSD, "Elements"))
     used_units = set()
     for inst in scenario.instances.values():
-        md = read_model_description(str(fmu_paths[inst.fmu]))
+        md = model_description(fmu_paths[inst.fmu], "")
         comp = ET.SubElement(elements, _q(SSD, "Component"), {
             "name": inst.name, "type": "application/x-fmu-sharedlibrary",
             "source": f"resources/{inst.fmu}.fmu"})

@@ -30,6 +30,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from sewfmu.scenarios.files.matplotlib_home import pyplot
+from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.references.reference_files import (
     check_experiment,
@@ -138,8 +139,6 @@ def _attribute(fmu: Path, name: str, text) -> float | None:
 def read_carried(fmu: Path) -> Reference | None:
     """The reference an FMU carries (fmi-ls-ref), run as its default experiment; None if it
     carries none."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
     try:
         with zipfile.ZipFile(fmu) as archive:
             if MANIFEST not in archive.namelist():
@@ -158,7 +157,7 @@ def read_carried(fmu: Path) -> Reference | None:
                             f"({' '.join(str(err).split())})") from None
     where = f"{fmu}: {shown(sources[0], 80)}"
     columns, skipped = parse_csv(raw, where)
-    md = read_model_description(str(fmu), validate=False)
+    md = model_description(fmu, "", validate=False)
     times = columns["time"]
     default = md.defaultExperiment
     step = _attribute(fmu, "stepSize", default.stepSize if default is not None else None)
@@ -277,9 +276,7 @@ def check(fmu: Path, reference: Reference, rtol: float | None = None,
 # --- recording --------------------------------------------------------------------------------
 def default_experiment(fmu: Path) -> Experiment:
     """The FMU's DefaultExperiment (a step of a 500th of the run where it gives none)."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
-    md = read_model_description(str(fmu), validate=False)
+    md = model_description(fmu, "", validate=False)
     default = md.defaultExperiment
     given = {name: _attribute(fmu, name, getattr(default, name, None))
              for name in ("startTime", "stopTime", "stepSize")}
@@ -305,12 +302,10 @@ def record(fmu: Path, refs: Path, experiment: Experiment | None = None,
            model: str | None = None) -> Path:
     """Run the FMU (its DefaultExperiment, or `experiment`) and write its reference into
     refs/<Model>/ in the Cross-Check layout."""
-    from fmpy import read_model_description  # fmpy: only when an FMU file is read
-
     # the modelName is data from inside the FMU, never a path: a plain name, and every file
     # checked to stay inside refs before anything runs or is written
     refs = Path(refs)
-    model = plain_name(model or read_model_description(str(fmu), validate=False).modelName, fmu)
+    model = plain_name(model or model_description(fmu, "", validate=False).modelName, fmu)
     experiment = experiment or default_experiment(fmu)
     check_experiment(f"{fmu}: the run to record", experiment.start, experiment.stop,
                      experiment.step, experiment.rel_tol)
