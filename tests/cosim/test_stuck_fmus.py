@@ -1,8 +1,8 @@
 """FMUs whose doStep never returns, run by `sewfmu` in a subprocess: a Python FMU (pythonfmu, as
 a third party writes one) asleep or spinning in pure Python, and a C FMU spinning in `for (;;);`
 (its ctypes call holds the main thread, where Python's signal handlers would run). Ctrl-C or
-SIGTERM ends the run, a sweep (its worker processes too), the check of an FMU against its
-references within 2 s with exit status 130 or 143
+SIGTERM ends the run, a sweep or a design study (their worker processes too), the check of an
+FMU against its references within 2 s with exit status 130 or 143
 and one line naming the instance, the FMI call and the time; experiment.step_timeout refuses the
 step. The record so far is kept, and checked against the closed forms x = t (the hanging FMU)
 and phi = omega0·t (the MainShaft beside it)."""
@@ -119,12 +119,25 @@ def _scenario(folder: Path, fmus: dict, mode: int = 0, spin: bool = False) -> Pa
     return path
 
 
+STARTED: list[subprocess.Popen] = []
+
+
+@pytest.fixture(autouse=True)
+def _nothing_left_running():
+    """Whatever a test found (a failed assertion before its signal too), nothing it started
+    stays running: a hanging FMU would spin for ever."""
+    yield
+    while STARTED:
+        with_kill(STARTED.pop())
+
+
 def _start(folder: Path, *args: str) -> tuple[subprocess.Popen, Path]:
     marker = folder / "hanging"
     marker.mkdir(exist_ok=True)
     env = {**os.environ, "HANG_MARKER": str(marker)}
     proc = subprocess.Popen([SEWFMU, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=env, start_new_session=True)
+    STARTED.append(proc)
     return proc, marker
 
 
@@ -149,12 +162,15 @@ def _signal_and_wait(proc: subprocess.Popen, sig: int) -> tuple[str, float]:
 
 
 def with_kill(proc: subprocess.Popen) -> None:
-    """Whatever a test found, nothing it started stays running."""
+    """SIGKILL to what is left of the process's session (it leads its own)."""
     for pid in processes_in("session", proc.pid):
         try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
 
 
 def _record(path: Path, steps: int, spin: bool = False) -> None:
@@ -271,6 +287,32 @@ def test_a_signal_ends_a_sweep_whose_workers_are_stuck_leaving_no_process(tmp_pa
     assert took < WITHIN, took
     assert err.splitlines() == ["sewfmu: interrupted (SIGINT); the points finished so far are "
                                 "kept: the same command resumes"]
+    deadline = time.monotonic() + WITHIN
+    while processes_in("session", proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert processes_in("session", proc.pid) == []
+
+
+def test_a_signal_ends_a_design_study_whose_run_is_stuck(tmp_path, fmus):
+    """With one worker the study runs in the command's own process, which the watchdog ends
+    (worker processes end as a sweep's: the same pool)."""
+    punch = subprocess.run([SEWFMU, "show", "punch_drive"], capture_output=True, text=True,
+                           check=True).stdout.replace("revolutions = 10", "revolutions = 2")
+    study = tmp_path / "study.toml"
+    study.write_text(punch + f'\n[instances.motor]\nfmu = "{fmus["hang"]}"\n'
+                             f'parameters = {{ hang_at = 0.05, mode = 1 }}\n')
+    proc, marker = _start(tmp_path, "optimize", str(study), "--vary", "punch.F30=1..5",
+                          "--minimize", "F2_peak", "--workers", "1", "--out",
+                          str(tmp_path / "opt"))
+    _when_stuck(proc, marker)
+    err, took = _signal_and_wait(proc, signal.SIGINT)
+    assert proc.returncode == 130, err
+    assert took < WITHIN, took
+    said = err.splitlines()[-1]
+    assert said.startswith("sewfmu: interrupted (SIGINT)") and said.endswith(
+        "the points finished so far are kept: the same command resumes"), err
+    assert "while motor was in doStep at t = 0.05" in said
+    assert "Traceback" not in err
     deadline = time.monotonic() + WITHIN
     while processes_in("session", proc.pid) and time.monotonic() < deadline:
         time.sleep(0.05)
