@@ -164,8 +164,8 @@ def claim(folder: Path, names) -> None:
 def _remove(path: Path) -> None:
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
-    else:
-        with contextlib.suppress(FileNotFoundError):
+    else:                       # gone, or a user's file stands where its folder was
+        with contextlib.suppress(FileNotFoundError, NotADirectoryError):
             path.unlink()
 
 
