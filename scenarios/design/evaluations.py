@@ -45,6 +45,7 @@ from sewfmu.scenarios.files.outputs import (
     set_aside,
 )
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.runs import progress
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
 from sewfmu.scenarios.runs.workers import (
@@ -101,12 +102,8 @@ def is_a_log(path: Path) -> bool:
 
 
 def progress_bar(enabled: bool, what: str, total: int | None):
-    """A study's runs on one line of stderr, on a terminal only (tqdm), or None."""
-    if not enabled:
-        return None
-    from tqdm import tqdm  # only when a bar is shown
-
-    return tqdm(total=total, desc=what, unit="run", disable=None, leave=False)
+    """A study's runs on one line of stderr, on a terminal only (runs/progress.py), or None."""
+    return progress.bar(total, what, "run") if enabled else None
 
 
 def one_line(err: BaseException) -> str:

@@ -1,53 +1,62 @@
-"""A run's progress on a terminal: steps done and the time left, on one line of stderr.
+"""Progress on a terminal, one line of stderr drawn by tqdm, for a run's steps, a sweep's points
+and a study's runs alike.
 
-Shown only when stderr is a terminal and the run has taken more than a second (a short run stays
-silent); redrawn at most a few times a second; the line is cleared when the run ends.
+Shown only when stderr is a terminal (tqdm's `disable=None`) and the work has taken more than a
+second (`delay`: a short run stays silent); redrawn at most a few times a second; the line is
+cleared when the work ends. tqdm is loaded only when a line is about to be drawn.
 """
 from __future__ import annotations
 
 import sys
 import time
 
+QUIET_FOR = 1.0        # s: work shorter than this shows nothing
+REDRAW_EVERY = 0.2     # s
+
+
+class _NoBar:
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def bar(total: int | None, what: str, unit: str, initial: int = 0, enabled: bool = True):
+    """A progress line of `total` items (`update(n)`, `close()`); a silent one where not
+    `enabled`."""
+    if not enabled:
+        return _NoBar()
+    from tqdm import tqdm  # only when a line may be drawn (start-up time)
+
+    return tqdm(total=total, initial=initial, desc=what, unit=unit, disable=None, leave=False,
+                delay=QUIET_FOR, mininterval=REDRAW_EVERY, file=sys.stderr)
+
 
 class TerminalProgress:
-    QUIET_FOR = 1.0        # s: runs shorter than this show nothing
-    REDRAW_EVERY = 0.2     # s
+    """A run's progress callback (`progress(label, done, total)` from the master's loop): its
+    line appears once the run has taken QUIET_FOR; before that not even tqdm is loaded."""
 
     def __init__(self, name: str, stream=None):
         self.name = name
         self.stream = stream or sys.stderr
         self.enabled = bool(getattr(self.stream, "isatty", lambda: False)())
         self.started = time.monotonic()
-        self.drawn_at = 0.0
-        self.shown = False
+        self.line = None
 
     def __call__(self, label: str, done: int, total: int) -> None:
         if not self.enabled:
             return
-        now = time.monotonic()
-        elapsed = now - self.started
-        if elapsed < self.QUIET_FOR or now - self.drawn_at < self.REDRAW_EVERY:
-            return
-        self.drawn_at = now
-        left = elapsed / done * (total - done) if done else float("nan")
-        what = f"{self.name} {label}".strip()
-        self.stream.write(f"\r\033[K{what}: step {done:,} of {total:,} "
-                          f"({100 * done / total:.0f} %), about {_duration(left)} left")
-        self.stream.flush()
-        self.shown = True
+        if self.line is None:
+            if time.monotonic() - self.started < QUIET_FOR:
+                return
+            from tqdm import tqdm  # only once a line is drawn (start-up time)
+
+            self.line = tqdm(total=total, desc=f"{self.name} {label}".strip(), unit="step",
+                             leave=False, mininterval=REDRAW_EVERY, file=self.stream)
+        self.line.update(done - self.line.n)
 
     def close(self) -> None:
-        if self.shown:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
-            self.shown = False
-
-
-def _duration(seconds: float) -> str:
-    if seconds != seconds:
-        return "? s"
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 5400:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
+        if self.line is not None:
+            self.line.close()
+            self.line = None

@@ -41,6 +41,7 @@ from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
 from sewfmu.scenarios.format.values import ScenarioError, label_of
 from sewfmu.scenarios.runs.budget import product
+from sewfmu.scenarios.runs.progress import bar as progress_line
 from sewfmu.scenarios.runs.sweep_record import (
     POINTS_FILE,
     TABLE_FILE,
@@ -263,7 +264,8 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
                       key=lambda p: -_cost(scenario, p))
         results_dir = str(out_dir / "points") if keep_results else None
         rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
-        bar = _progress(len(points), len(rows), progress, scenario.name)
+        bar = progress_line(len(points), f"sweep {scenario.name}", "point", initial=len(rows),
+                            enabled=progress)
         with open_log(out_dir / POINTS_FILE) as log:
             for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
                 log.write((json.dumps(row) + "\n").encode("utf-8"))
@@ -329,21 +331,6 @@ def _write_table(rows: list[dict], swept: list[str], path: Path) -> None:
         writer.writerows(rows)
 
     write_atomic(path, write)
-
-
-class _NoBar:
-    def update(self, n):
-        pass
-
-    def close(self):
-        pass
-
-
-def _progress(total: int, already: int, enabled: bool, name: str):
-    if not enabled:
-        return _NoBar()
-    from tqdm import tqdm  # only when a bar is shown
-    return tqdm(total=total, initial=already, desc=f"sweep {name}", unit="point")
 
 
 def _numeric(values) -> bool:
