@@ -39,15 +39,12 @@ import tempfile
 import time
 from pathlib import Path
 
+import filelock
+
 from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.files import cache_root as cache_root_setting
 from sewfmu.scenarios.files.outputs import write_atomic
-
-try:
-    import fcntl
-except ImportError:                 # Windows: no lock; the atomic rename still keeps entries whole
-    fcntl = None
 
 STALE_DAYS = 30
 # beyond this many entries the least recently used go, if unused for an hour (a running process
@@ -188,16 +185,16 @@ def _usable(entry: Path, key: str, expected: list[archives.Member]) -> bool:
 @contextlib.contextmanager
 def _locked(cache: Path):
     """One run at a time makes, mends or removes entries (readers take no lock)."""
-    fd = None
-    if fcntl is not None:
-        with contextlib.suppress(OSError):          # no lock where the file system has none
-            fd = os.open(cache / ".sewfmu-lock", os.O_RDWR | os.O_CREAT, 0o666)
-            fcntl.flock(fd, fcntl.LOCK_EX)
+    lock = filelock.FileLock(cache / ".sewfmu-lock", mode=0o666)
+    try:
+        lock.acquire()
+    except OSError:                                 # no lock where the file system has none
+        lock = None
     try:
         yield
     finally:
-        if fd is not None:
-            os.close(fd)
+        if lock is not None:
+            lock.release()
 
 
 def _scratch(entry: Path, kind: str) -> Path:

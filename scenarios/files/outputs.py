@@ -20,16 +20,15 @@
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import re
 import shutil
+import tempfile
 import threading
 from pathlib import Path
 
-try:
-    import fcntl
-except ImportError:                  # Windows: no flock; a folder is then not guarded
-    fcntl = None
+import filelock
 
 from sewfmu.errors import Error
 
@@ -239,8 +238,9 @@ _HELD_LOCK = threading.Lock()
 def held(folder: Path):
     """The folder for this study or sweep alone while the block runs: a second one into it is
     refused in one line, since both would append to the same resume record and mix their lines.
-    The lock is on the folder itself (flock): it leaves no file behind, and a killed process's
-    lock goes with it. The thread that holds a folder may hold it again (a study holds its
+    The lock (filelock: flock, or Windows' own) is a file of this user's temporary folder named
+    by the folder's real path: nothing is left in the folder, and a killed process's lock goes
+    with it. The thread that holds a folder may hold it again (a study holds its
     folder from its first check to its last file, its record and its sweep inside that)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -256,18 +256,14 @@ def held(folder: Path):
             with _HELD_LOCK:
                 _HELD[key] = (me, _HELD[key][1] - 1)
         return
-    if fcntl is None:
-        yield
-        return
-    fd = os.open(folder, os.O_RDONLY)
+    lock = filelock.FileLock(_lock_file(key), timeout=0)
     try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise OutputError(f"{folder}: another sewfmu sweep or study is writing into this folder "
-                              f"now; "
-                              f"give another output folder, or run this one when it has "
-                              f"ended") from None
+        lock.acquire()
+    except filelock.Timeout:
+        raise OutputError(f"{folder}: another sewfmu sweep or study is writing into this folder "
+                          f"now; give another output folder, or run this one when it has "
+                          f"ended") from None
+    try:
         with _HELD_LOCK:
             _HELD[key] = (me, 1)
         try:
@@ -276,7 +272,15 @@ def held(folder: Path):
             with _HELD_LOCK:
                 _HELD.pop(key, None)
     finally:
-        os.close(fd)
+        lock.release()
+
+
+def _lock_file(real_path: str) -> str:
+    """The lock of an output folder: in this user's temporary folder, never in the folder."""
+    user = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
+    locks = Path(tempfile.gettempdir()) / f"sewfmu-locks-{user}"
+    locks.mkdir(mode=0o700, exist_ok=True)
+    return str(locks / f"{hashlib.sha256(real_path.encode()).hexdigest()[:32]}.lock")
 
 
 def set_aside(path: Path) -> Path:
