@@ -54,6 +54,7 @@ from sewfmu.scenarios.files.outputs import replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs import budget as runs_budget
+from sewfmu.scenarios.runs.budget import worker_count
 
 METHODS = ("local", "global")
 PENALTY = 1e9              # an infeasible point, to the optimizer: worse than any feasible one
@@ -168,10 +169,8 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
     with a time estimate, before the first run."""
     if method not in METHODS:
         raise ScenarioError(f"--method: one of {', '.join(METHODS)}, got {method!r}")
-    if workers is None:               # the local methods run here; the global one on every core
-        workers = (os.cpu_count() or 1) if method == "global" else 1
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ScenarioError(f"--workers: a whole number >= 1, got {workers!r}")
+    # the local methods run here; the global one on every core
+    workers = worker_count(workers, (os.cpu_count() or 1) if method == "global" else 1)
     budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS[method])
     parallel = workers if method == "global" else 1
     what, per_run = f"optimize {scenario.name}", runs_budget.seconds_per_run(scenario)

@@ -19,7 +19,7 @@ import os
 import sys
 
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError, plain
+from sewfmu.scenarios.format.values import ScenarioError, plain, short
 
 SETTING = "SEWFMU_MAX_RUNS"
 DEFAULT_MAX_RUNS = 10_000
@@ -29,6 +29,17 @@ START_COST = 0.05           # seconds per run: the FMUs instantiated and initial
 POOL_START = 2.0            # seconds: worker processes started, their FMUs first loaded
 SAID_ALWAYS = 30.0          # an estimate beyond this is said even where no progress is shown
 
+
+
+def worker_count(workers, default: int | None = None) -> int | None:
+    """The number of worker processes a user gave (--workers, workers=): a whole number >= 1,
+    numpy's integers too; None gives `default`. The one check of it, for sweeps and studies."""
+    if workers is None:
+        return default
+    value = plain(workers)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ScenarioError(f"workers (--workers): a whole number >= 1, got {short(workers)}")
+    return value
 
 def max_runs(given=None) -> int:
     """The bound: `given` (the option, the argument), else SEWFMU_MAX_RUNS, else the default."""

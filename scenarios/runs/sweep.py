@@ -40,7 +40,7 @@ from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
 from sewfmu.scenarios.format.values import ScenarioError, label_of
-from sewfmu.scenarios.runs.budget import product
+from sewfmu.scenarios.runs.budget import product, worker_count
 from sewfmu.scenarios.runs.progress import bar as progress_line
 from sewfmu.scenarios.runs.sweep_record import (
     POINTS_FILE,
@@ -237,9 +237,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
     from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
 
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 1):
-        raise ScenarioError(f"--workers must be a whole number >= 1, got {workers!r}")
+    workers = worker_count(workers)
     out_dir = Path(out_dir)
     paths = fmus_for(scenario)            # built once here, not concurrently in every worker
     for point in points:                  # a misspelt parameter fails here, before any point
