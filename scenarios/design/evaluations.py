@@ -22,15 +22,12 @@ import contextlib
 import csv
 import io
 import math
-import os
 import re
 import sys
 import time
-from collections import deque
 from dataclasses import dataclass, field
-from multiprocessing.connection import wait
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -48,13 +45,7 @@ from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs import progress
 from sewfmu.scenarios.runs.runner import summarize
 from sewfmu.scenarios.runs.sweep import WORKER_PRELOAD, Point, settings_of
-from sewfmu.scenarios.runs.workers import (
-    WorkerDied,
-    _answer,
-    _Worker,
-    forkserver_context,
-    stop_all,
-)
+from sewfmu.scenarios.runs.workers import WorkerPool
 
 OK, INFEASIBLE, FAILED = "ok", "infeasible", "failed"
 LOG_FILE = "evaluations.csv"
@@ -230,52 +221,6 @@ class Evaluator:
             self.pool.close()
         if self.log is not None:
             self.log.close()
-
-
-class WorkerPool:
-    """The sweep engine's worker processes (runs/workers.py: one point at a time each, tied to
-    this process's life, a dead one replaced), kept for a whole study: each batch of the global
-    method would otherwise pay their start and their first loading of the FMUs again (1.7 to
-    2 s for two workers, measured on this project's 2-core machine under load)."""
-
-    def __init__(self, size: int, preload: list[str]):
-        self.size, self.preload = size, preload
-        self.workers: list = []
-        self.context = None
-
-    def run(self, tasks: list) -> Iterator[tuple[str, object]]:
-        """(key, answer) for each (key, func, args) as it finishes, as runs.workers.run_tasks
-        gives them; an interruption stops every worker."""
-        queue = deque(tasks)
-        if self.context is None:
-            self.context = forkserver_context(self.preload)
-        while len(self.workers) < min(self.size, len(queue)):
-            self.workers.append(_Worker(self.context, os.getpid()))
-        try:
-            for worker in self.workers:
-                if queue:
-                    worker.give(queue.popleft())
-            while any(w.task is not None for w in self.workers):
-                busy = [w for w in self.workers if w.task is not None]
-                wait([w.conn for w in busy] + [w.process.sentinel for w in busy])
-                for i, worker in enumerate(self.workers):
-                    answer = _answer(worker) if worker.task is not None else None
-                    if answer is None:
-                        continue                     # idle, or still working
-                    key, worker.task = worker.task[0], None
-                    if isinstance(answer, WorkerDied):   # replace it, the others go on
-                        worker.stop()
-                        worker = self.workers[i] = _Worker(self.context, os.getpid())
-                    if queue:
-                        worker.give(queue.popleft())
-                    yield key, answer
-        except BaseException:                        # Ctrl-C, or the caller gave up
-            self.close()
-            raise
-
-    def close(self) -> None:
-        stop_all(self.workers)          # all at once: each may be stuck in an FMU call
-        self.workers = []
 
 
 class EvaluationLog:
