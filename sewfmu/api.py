@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
+from sewfmu.arguments import callback, flag, one_line, progress_of, whole
+from sewfmu.arguments import folder as _folder
 from sewfmu.errors import Error
 from sewfmu.scenarios.files.outputs import OutputError
 from sewfmu.scenarios.format.loader import catalogue
@@ -37,6 +39,7 @@ def scenarios() -> list[str]:
     return sorted(catalogue())
 
 
+@one_line
 def read_value(text: str) -> Any:
     """A value typed as text, as `--set` reads it: a number, true or false or a quoted string
     (TOML's scalars), else the text itself, a value with its unit for `set=` ("955 rpm"). A form
@@ -44,6 +47,7 @@ def read_value(text: str) -> Any:
     return parse_value(text, "value")
 
 
+@one_line
 def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
     """A scenario (catalogue name, TOML or SSP path) with the `set` overrides applied; a Scenario
     given is copied, never changed."""
@@ -66,6 +70,7 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
     return loaded
 
 
+@one_line
 def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
     """load(), then every value checked as a run checks it before its first step (each against
     its FMU's declared type and range, an input fed by a connection refused), nothing run: the
@@ -77,6 +82,7 @@ def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None)
     return loaded
 
 
+@one_line
 def show(scenario: str) -> str:
     """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`); one of
     sewfmu's FMUs by name (PunchContact): its inputs, outputs and parameters."""
@@ -88,13 +94,17 @@ def show(scenario: str) -> str:
 
     if isinstance(scenario, str) and scenario in FMUS:
         return component_text(scenario)
-    path = resolve(scenario)
+    if not isinstance(scenario, (str, Path)):
+        raise ScenarioError(f"show: expected a catalogue name, a path to a .toml file or one of "
+                            f"sewfmu's FMUs, got {type(scenario).__name__}")
+    path = resolve(str(scenario))
     if path.suffix.lower() != ".toml":
         raise ScenarioError(f"{scenario}: only TOML scenarios can be shown (an SSP archive is "
                             f"read by sewfmu, not written back as TOML)")
     return path.read_text(encoding="utf-8-sig")
 
 
+@one_line
 def parameters(name: str | Path | Scenario, set: Mapping[str, Any] | None = None):
     """The parameters a user may set, as a table (a list of dicts with instance, parameter,
     default, value, unit, range, meaning; print() shows it as `sewfmu show NAME --parameters`):
@@ -158,8 +168,8 @@ class Run:
         `crank_deg` in [0, 360), increasing (no wrap-around), and the recorded fields."""
         from sewfmu.scenarios.runs.revolution import revolution  # numpy: not at `import sewfmu`
 
-        return revolution(self._recorded("revolution()"), f"{self.shaft or 'shaft'}.phi", k,
-                          self.name)
+        return revolution(self._recorded("revolution()"), f"{self.shaft or 'shaft'}.phi",
+                          whole(k, "revolution(k)"), self.name)
 
     def mechanism(self, frames: int = 36) -> dict:
         """The mechanism at `frames` equally spaced crank angles of the last revolution, as
@@ -169,6 +179,7 @@ class Run:
         from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
         from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
 
+        frames = whole(frames, "mechanism(frames)", 2, 3600)     # 0.1 degree apart at most
         if self.scenario is None or self.series is None:
             raise ScenarioError(f"{self.name}: no recorded run to draw (a [compare] run: take "
                                 f"one of run.runs)")
@@ -187,6 +198,7 @@ class Run:
         return f"<sewfmu.Run {self.name}: {what}; {shown}>"
 
 
+@one_line
 def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
         out: str | Path | None = None, plot: bool = False, animate: bool = False,
         report: bool = False, fmu_dir: str | Path | None = None, progress: bool = False) -> Run:
@@ -205,6 +217,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
 
     sc = load(scenario, set)
     out, fmu_dir = _folder(out, "out"), _folder(fmu_dir, "fmu_dir")
+    plot, animate, report = flag(plot, "plot"), flag(animate, "animate"), flag(report, "report")
+    progress = progress_of(progress)
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
     if sc.study:
@@ -316,6 +330,7 @@ class SweepFailed(ScenarioError):
         self.rows = rows
 
 
+@one_line
 def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = None,
           set: Mapping[str, Any] | None = None, *, workers: int | None = None,
           scheduler: str | None = None, out: str | Path | None = None, plot: bool = False,
@@ -355,6 +370,8 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
                                 or plain(workers) < 1):
         raise ScenarioError(f"workers: expected a whole number >= 1, got {workers!r}")
     out = _folder(out, "out")
+    plot, report, results = flag(plot, "plot"), flag(report, "report"), flag(results, "results")
+    progress, on_point = flag(progress, "progress"), callback(on_point, "on_point")
     # counted from the axes' lengths, before a value list or a point is made
     count, cause = count_points(sc, {k: _length(v, f"grid {k}") for k, v in grid.items()})
     per_run = budget.seconds_per_run(sc) if scheduler is None else None
@@ -400,21 +417,6 @@ def _length(values, where: str) -> int:
     return len(values)
 
 
-def _folder(value, name: str) -> Path | None:
-    """A folder argument (out=, fmu_dir=): None, or a path that can be one."""
-    if value is None:
-        return None
-    if not isinstance(value, (str, Path)):
-        raise ScenarioError(f"{name}: expected a folder path, got {type(value).__name__} "
-                            f"{value!r}")
-    if "\x00" in str(value) or not str(value):
-        raise ScenarioError(f"{name}: {str(value)!r} is not a path")
-    path = Path(value)
-    if path.exists() and not path.is_dir():
-        raise ScenarioError(f"{name}: {path} exists and is not a folder")
-    return path
-
-
 def _unit_of(sc: Scenario, target: str) -> str:
     """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
     from sewfmu.scenarios.format.declared_units import parameter_units  # on first use
@@ -426,6 +428,7 @@ def _unit_of(sc: Scenario, target: str) -> str:
     return "" if fmu in sc.fmu_files else parameter_units(fmu).get(key, "")
 
 
+@one_line
 def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
             rtol: float | None = None) -> dict[str, dict]:
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
@@ -452,6 +455,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     return out
 
 
+@one_line
 def build(fmi: int = 2, dest: str | Path | None = None,
           names: list[str] | None = None) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
@@ -465,6 +469,12 @@ def build(fmi: int = 2, dest: str | Path | None = None,
 
     if isinstance(fmi, bool) or fmi not in (2, 3):
         raise ScenarioError(f"fmi: the FMI version, 2 or 3, got {fmi!r}")
+    names = [names] if isinstance(names, str) else names
+    if names is not None and (not isinstance(names, (list, tuple))
+                              or not all(isinstance(n, str) for n in names)):
+        raise ScenarioError(f"names: expected a list of FMU names ({', '.join(FMUS)}), got "
+                            f"{type(names).__name__}")
+    dest = _folder(dest, "dest")
     for name in names or []:
         if name not in FMUS:
             raise ScenarioError(f"unknown FMU {name!r}{did_you_mean(name, FMUS)} "

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from sewfmu.api import _folder, load
+from sewfmu.arguments import flag, one_line, workers_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
@@ -33,6 +34,7 @@ def _design_scenario(scenario, set):
     return sc, paths, {n: extracted_fmu(Path(paths[i.fmu]))[1] for n, i in sc.instances.items()}
 
 
+@one_line
 def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
              minimize: str | None = None, maximize: str | None = None,
              target: Mapping[str, Any] | None = None, constraints: list | None = None,
@@ -50,6 +52,11 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
     out = _folder(out, "out")
+    plot, progress = flag(plot, "plot"), flag(progress, "progress")
+    workers = workers_of(workers)
+    if constraints is not None and not isinstance(constraints, (str, tuple, list)):
+        raise ScenarioError(f"constraints: expected a list of \"FIGURE>=VALUE unit\" texts or "
+                            f"(figure, op, value) tuples, got {type(constraints).__name__}")
     _refuse_fixed_and_varied(set, vary, "varied", "--vary, vary=")
     sc, paths, described = _design_scenario(scenario, set)
     known = space.figures_of_scenario(sc)
@@ -62,6 +69,7 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
                            max_evaluations, progress, max_runs)
 
 
+@one_line
 def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
         set: Mapping[str, Any] | None = None, out: str | Path | None = None,
         max_evaluations: int | None = None, progress: bool = False,
@@ -75,6 +83,7 @@ def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
     out = _folder(out, "out")
+    progress = flag(progress, "progress")
     _refuse_fixed_and_varied(set, free, "free", "--free, free=")
     sc, paths, described = _design_scenario(scenario, set)
     measured = design.read_data(data)
@@ -85,6 +94,7 @@ def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
                       max_runs)
 
 
+@one_line
 def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],
                 *, set: Mapping[str, Any] | None = None, method: str = "sobol",
                 samples: int | None = None, workers: int | None = None,
@@ -98,6 +108,10 @@ def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figure
     from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
 
     out = _folder(out, "out")
+    progress, workers = flag(progress, "progress"), workers_of(workers)
+    if not isinstance(figures, (str, tuple, list)):
+        raise ScenarioError(f"figures: expected a key figure's name or a list of them, got "
+                            f"{type(figures).__name__}")
     _refuse_fixed_and_varied(set, vary, "varied", "--vary, vary=")
     sc, _, described = _design_scenario(scenario, set)
     named = space.figures_named(space.figures_of_scenario(sc), figures)

@@ -1,0 +1,85 @@
+"""The public API's arguments checked at its doors (sewfmu/api.py, sewfmu/design_api.py): a
+folder, a flag, a progress callback, and what the file system answers. Whatever a caller passes
+(another type, None, a number, a path into /proc, a file that does not exist, a name too long),
+what comes out is a sewfmu.Error of one line, never Python's TypeError or FileNotFoundError."""
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+from typing import Any, Callable
+
+from sewfmu.scenarios.files.outputs import OutputError
+from sewfmu.scenarios.format.values import ScenarioError, plain, short
+
+
+def folder(value: Any, name: str) -> Path | None:
+    """A folder argument (out=, fmu_dir=, dest=): None, or a path that can be one."""
+    if value is None:
+        return None
+    if not isinstance(value, (str, Path)):
+        raise ScenarioError(f"{name}: expected a folder path, got {type(value).__name__} "
+                            f"{short(value)}")
+    if "\x00" in str(value) or not str(value):
+        raise ScenarioError(f"{name}: {short(str(value))} is not a path")
+    path = Path(value)
+    try:
+        if path.exists() and not path.is_dir():
+            raise ScenarioError(f"{name}: {path} exists and is not a folder")
+    except OSError as err:          # a name too long, a loop of links, no permission
+        raise OutputError(f"{name}: {short(str(value))} cannot be a folder: "
+                          f"{err.strerror or err}") from None
+    return path
+
+
+def flag(value: Any, name: str) -> bool:
+    """True or False (numpy's bools too): plot=1 or plot="no" is refused, not read as truth."""
+    value = plain(value)
+    if not isinstance(value, bool):
+        raise ScenarioError(f"{name}: expected True or False, got {short(value)}")
+    return value
+
+
+def progress_of(value: Any, name: str = "progress") -> bool | Callable:
+    """progress=: True (a bar on the terminal), False, or a function progress(done, total)."""
+    return value if callable(value) else flag(value, f"{name} (True, False or a function)")
+
+
+def callback(value: Any, name: str) -> Callable | None:
+    """A function the API calls back (on_point=), or None."""
+    if value is not None and not callable(value):
+        raise ScenarioError(f"{name}: expected a function or None, got {short(value)}")
+    return value
+
+
+def one_line(function: Callable) -> Callable:
+    """A public function whose file system errors come out as one OutputError line naming the
+    path and the cause (a folder in /proc, a file that does not exist, no permission, a name too
+    long): every refusal of the API is a sewfmu.Error."""
+    @functools.wraps(function)
+    def guarded(*args, **kwargs):
+        try:
+            return function(*args, **kwargs)
+        except OSError as err:
+            where = f"{short(str(err.filename))}: " if err.filename is not None else ""
+            raise OutputError(f"{function.__name__}: {where}"
+                              f"{' '.join(str(err.strerror or err).split())}") from None
+    return guarded
+
+
+def workers_of(value: Any, name: str = "workers") -> int | None:
+    """How many worker processes: None (the default) or a whole number >= 1."""
+    value = plain(value)
+    if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+        raise ScenarioError(f"{name}: expected a whole number >= 1, got {short(value)}")
+    return value
+
+
+def whole(value: Any, name: str, low: int | None = None, high: int | None = None) -> int:
+    """A whole number, from low to high where given (numpy's ints too; not True, not 1.5)."""
+    value = plain(value)
+    if isinstance(value, bool) or not isinstance(value, int) \
+            or (low is not None and value < low) or (high is not None and value > high):
+        span = (f" from {low} to {high}" if low is not None and high is not None
+                else f" >= {low}" if low is not None else "")
+        raise ScenarioError(f"{name}: expected a whole number{span}, got {short(value)}")
+    return value
