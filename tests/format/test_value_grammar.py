@@ -4,6 +4,7 @@ never pint's or Python's own exception (OffsetUnitCalculusError, OverflowError, 
 ValueError, RecursionError...). The texts are arbitrary, and built from the grammar's own pieces
 (numbers huge and odd, units, exponents, parentheses, commas, '..') to reach its corners."""
 import math
+import time
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -139,3 +140,16 @@ def test_reading_a_typed_value_never_raises_python_s_own_errors(text):
     value = parse_value(text, "--set x.y")
     if text == "1\nx = 2":      # one value is one line: not TOML's 1 with a key after it
         assert value == text
+
+
+@pytest.mark.parametrize("text", [
+    "1 1000⁹⁹⁹⁹⁹⁹⁹⁹⁹", "1 kN**99**99", "1 ((((kN**99)**99)**99)**99)**99", "1 N" + "⁹" * 60,
+    "1 m" + "*m" * 30, "1 " + "(" * 30 + "m" + ")" * 30, "1 Qm**12", "9" * 100_000 + " N"])
+def test_a_unit_pint_would_compute_for_ever_is_refused_at_once(text):
+    """pint evaluates the numbers in a unit's text as Python integers: "1000⁹⁹⁹⁹⁹⁹⁹⁹⁹" ran
+    for ever (1000 ** 999999999) before any check could see it."""
+    in_declared_unit("1 N", "N")             # pint's registry built before the clock starts
+    start = time.perf_counter()
+    with pytest.raises(UnitError):
+        in_declared_unit(text, "N", "punch.F30")
+    assert time.perf_counter() - start < 0.5
