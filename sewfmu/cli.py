@@ -348,7 +348,8 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
                    help="override a parameter for every point")
     p.add_argument("--grid", action="append", metavar="INSTANCE.PARAM=V1,V2,...",
-                   help="sweep this parameter over these values (adds to the file's grid)")
+                   help="sweep this parameter over these values (adds to the file's grid); a "
+                        "unit after the last applies to all (\"100,200 rpm\")")
     p.add_argument("--workers", type=console.whole_number, help="local worker processes (default: all "
                                                          "cores)")
     p.add_argument("--scheduler", metavar="ADDRESS",
