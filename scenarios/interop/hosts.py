@@ -24,6 +24,7 @@ import numpy as np
 
 from sewfmu.errors import Error
 from sewfmu.extras import require
+from sewfmu.processes import python_command
 
 HOSTS = ("libcosim", "ecos", "ecos-cli")
 
@@ -248,10 +249,12 @@ def run_in_host(host: str, ssp: Path, scenario, record: list[str], out_csv: Path
     error_file = Path(str(out_csv) + ".error")
     error_file.unlink(missing_ok=True)
     started = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "sewfmu.scenarios.interop.hosts", host, str(ssp),
-                           repr(scenario.even_steps()[1]), repr(scenario.end_time()),
-                           json.dumps(record),
-                           str(out_csv)], capture_output=True, text=True, timeout=timeout)
+    # -P: python -m would put the current folder first on sys.path (sewfmu/processes.py)
+    proc = subprocess.run(python_command("-m", "sewfmu.scenarios.interop.hosts", host, str(ssp),
+                                         repr(scenario.even_steps()[1]),
+                                         repr(scenario.end_time()), json.dumps(record),
+                                         str(out_csv)),
+                          capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - started
     if error_file.exists():
         # the FMU's own words, as the host logged them (libcosim: "... logStatusError] text")

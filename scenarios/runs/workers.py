@@ -29,6 +29,7 @@ from functools import partial
 from multiprocessing.connection import wait
 from typing import Callable, Iterable, Iterator
 
+from sewfmu.processes import safe_path
 from sewfmu.scenarios.cosim import watchdog
 from sewfmu.scenarios.cosim.interrupt import Interrupted
 
@@ -67,7 +68,8 @@ def forkserver_context(preload) -> multiprocessing.context.BaseContext:
     reaches the whole process group. An ignored signal stays ignored through exec, so the server
     and every worker it forks ignore it (the main process ends them itself); a Ctrl-C to the
     main process in the few milliseconds of the server's start is lost (pressed again, it
-    counts)."""
+    counts). The server starts in safe-path mode (sewfmu/processes.py): nothing it or a worker
+    imports comes from the current folder."""
     from multiprocessing import forkserver  # with the context: where its server is started
 
     context = multiprocessing.get_context("forkserver")
@@ -75,7 +77,8 @@ def forkserver_context(preload) -> multiprocessing.context.BaseContext:
         context.set_forkserver_preload(list(preload))
     handler = signal.signal(signal.SIGINT, signal.SIG_IGN)     # inherited through exec
     try:
-        forkserver.ensure_running()
+        with safe_path():
+            forkserver.ensure_running()
     finally:
         signal.signal(signal.SIGINT, handler)
     return context
@@ -145,7 +148,7 @@ class _Worker:
     def __init__(self, context, main_pid: int):
         self.conn, child = context.Pipe()
         self.process = context.Process(target=_serve, args=(child, main_pid), daemon=True)
-        with _main_script_hidden():
+        with _main_script_hidden(), safe_path():     # a fork server that died starts anew here
             self.process.start()
         child.close()
         self.task = None

@@ -8,7 +8,8 @@ context), so that a run starts in milliseconds and not in the seconds of importi
 fmpy; where there is none (not Linux), from spawn. A run's process is kept ready before its run
 (a spare, warmed on the scenario run last: worker.standby), and the next one made when that run
 ends, so that only a warm run stands between Run and the figures. Cancel ends the job's process
-group: a sweep's workers with it."""
+group: a sweep's workers with it. Every process starts in safe-path mode (sewfmu/processes.py):
+the fork server, its children and a spawned process import nothing from the current folder."""
 from __future__ import annotations
 
 import multiprocessing
@@ -23,6 +24,7 @@ from pathlib import Path
 import sewfmu
 from sewfmu.app.worker import main as work
 from sewfmu.app.worker import standby
+from sewfmu.processes import safe_path
 
 ENDING = 3.0            # s a job's process is given after SIGTERM before SIGKILL
 # jobs running at once, over all tabs and clients: more would only share the cores (a sweep uses
@@ -88,7 +90,8 @@ class Jobs:
             here, there = self._ctx.Pipe()
             process = self._ctx.Process(target=standby, args=(warm, there),
                                         name="sewfmu-app-spare")
-            process.start()
+            with safe_path():       # the fork server starts with the first process
+                process.start()
             self._spare = (process, here)
         there.close()
 
@@ -126,7 +129,8 @@ class Jobs:
                 receive, send = self._ctx.Pipe(duplex=False)
                 job.process = self._ctx.Process(target=work, name=f"sewfmu-app-{kind}-{job_id}",
                                                 args=(kind, request, where, send))
-                job.process.start()
+                with safe_path():
+                    job.process.start()
                 send.close()
             self._jobs[job_id] = job
         threading.Thread(target=self._listen, args=(job, receive), daemon=True,
