@@ -1,5 +1,5 @@
 """Every accuracy figure that README.md and docs/ quote, computed from the code and written into
-them, so that a quoted figure cannot go stale unnoticed (tests/test_doc_figures.py recomputes them).
+them, so that a quoted figure cannot go stale unnoticed (tests/docs/test_doc_figures.py recomputes them).
 
     .venv/bin/python bench/doc_figures.py            # compute, rewrite the figures in the docs
     .venv/bin/python bench/doc_figures.py --check    # compute, compare, change nothing
@@ -23,7 +23,7 @@ several separated by commas (the largest value counts). The kinds:
              (`stamp timings`)
 
 The same template parses a block back (whitespace aside: prose may be rewrapped):
-tests/test_doc_figures.py recomputes the README's figures in the fast loop and every block in a
+tests/docs/test_doc_figures.py recomputes the README's figures in the fast loop and every block in a
 slow test; a block not in its template's layout is an error. Accuracy figures are deterministic on
 one machine, timings are not: hence the two stamps, and wall times left alone by default.
 
@@ -512,15 +512,15 @@ BLOCKS = {
 }
 
 # The "within <number>" in the docs that are not accuracy figures against the monolithic solution,
-# and why they are left to others; every other one must lie in a block (tests/test_doc_figures.py).
+# and why they are left to others; every other one must lie in a block (tests/docs/test_doc_figures.py).
 WITHIN_ELSEWHERE = {
     "within 0.06° and 0.0001 N": "sewfmu against another FMI host (ecos's command-line tool): "
-                                  "`sewfmu crosscheck --host ecos-cli`; tests/test_interop.py",
+                                  "`sewfmu crosscheck --host ecos-cli`; tests/hosts/test_interop.py",
     "within 0.06°, its CSV": "the same, in docs/fmi.md's list of hosts",
-    "within 1e-4° and 1e-5 N": "libcosim against sewfmu: tests/test_interop.py (2e-4°, 1e-5 N)",
+    "within 1e-4° and 1e-5 N": "libcosim against sewfmu: tests/hosts/test_interop.py (2e-4°, 1e-5 N)",
     "within 0.001 N (F2_weld_mean) of sewfmu's adaptive run": "OMSimulator, a host built by hand",
     "within 0.2 µm of the exact bouncing": "the held punch against its exact bouncing: "
-                                           "tests/test_punch_contact.py",
+                                           "tests/components/test_punch_contact.py",
     "within 4 % of its μ*": "Morris's μ* against one-at-a-time runs: "
                             "tests/test_design_examples.py (20 %)",
 }

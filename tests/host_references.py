@@ -1,5 +1,5 @@
-"""The regression references as a foreign FMI host replays them (tests/test_fmucheck.py,
-tests/test_fmusim.py): what to run, and whether its output reproduces the reference."""
+"""The regression references as a foreign FMI host replays them (tests/hosts/test_fmucheck.py,
+tests/hosts/test_fmusim.py): what to run, and whether its output reproduces the reference."""
 import numpy as np
 
 from sewfmu.scenarios.references.fmu_reference import read_options

@@ -5,7 +5,6 @@ tests of the FMUs themselves, in test_fmus.py and test_fmi_statuses.py, run agai
 import subprocess
 import sys
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +19,7 @@ from sewfmu.scenarios.references import regression as references
 from sewfmu.scenarios.runs.runner import simulate
 from sewfmu.scenarios.runs.variants import variants
 from tests.fmu_host import Host
-
-REPO = Path(__file__).resolve().parent.parent
+from tests.paths import REPO
 
 
 @pytest.fixture(autouse=True)

@@ -5,7 +5,6 @@ length is taken or refused quickly; two threads keep stepping while one is refus
 instantiate/free does not grow sys.path or memory."""
 import json
 import math
-import os
 import subprocess
 import sys
 import threading
@@ -16,6 +15,7 @@ from fmpy.fmi1 import FMICallException
 
 from sewfmu.components.punch_contact import MAX_SEARCH_INTERVALS, PunchContact
 from tests.fmu_host import Host
+from tests.paths import REPO
 
 
 def _ready(fmus, name="PunchContact", **inputs):
@@ -184,7 +184,7 @@ print(json.dumps({"blocks": len(after) - len(before), "path_same": sys.path == p
 @pytest.mark.parametrize("name", ["PunchContact", "CarriageModal"])
 def test_instantiate_and_free_a_thousand_times_grows_neither_sys_path_nor_memory(fmus, name,
                                                                                 tmp_path):
-    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    repo = str(REPO)
     proc = subprocess.run([sys.executable, "-c", _CYCLES, repo, str(fmus[name]), "1000"],
                           capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]

@@ -20,8 +20,7 @@ from sewfmu.components.punch_split import PunchBody
 from sewfmu.components.registry import FMUS
 from sewfmu.components.shaft import MainShaft
 from tests.fmu_host import Host
-
-REPO = Path(__file__).resolve().parent.parent
+from tests.paths import REPO
 
 
 def test_every_fmu_passes_fmpy_validate(fmus):

@@ -21,8 +21,8 @@ from sewfmu.scenarios.cosim.fmi_calls import CosimError
 from sewfmu.scenarios.files import archives
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
+from tests.paths import REPO
 
-REPO = Path(__file__).resolve().parent.parent
 OLD = time.time() - 400 * 86400                 # older than any clean-up rule
 
 _RUN = """

@@ -1,7 +1,7 @@
 """Extracted FMUs kept between runs and processes (scenarios/cosim/fmu_cache.py): one folder per FMU
 content, shared by concurrent runs, its bytecode kept, stale entries removed, and a plain
 temporary extraction where there is no cache to write. What the cache may touch, and damaged,
-bombed and killed extractions: tests/test_cache_owns.py."""
+bombed and killed extractions: tests/cosim/test_cache_owns.py."""
 import os
 import subprocess
 import sys
@@ -9,8 +9,7 @@ import time
 from pathlib import Path
 
 from sewfmu.scenarios.cosim import fmu_cache
-
-REPO = Path(__file__).resolve().parent.parent
+from tests.paths import REPO
 
 _EXTRACT_AND_RUN = """
 import sys

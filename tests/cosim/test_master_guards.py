@@ -13,8 +13,8 @@ import pytest
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
 from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.format.values import ScenarioError
+from tests.cosim.test_records_at_once import _system
 from tests.fake_fmu import Failing, Integrator, fake_scenario, maker
-from tests.test_records_at_once import _system
 
 
 def _in_a_process(script: str) -> str:

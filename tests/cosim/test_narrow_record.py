@@ -7,8 +7,7 @@ from pathlib import Path
 import pytest
 
 import sewfmu
-
-REPO = Path(__file__).resolve().parent.parent
+from tests.paths import REPO
 
 
 def _narrow(tmp_path) -> Path:

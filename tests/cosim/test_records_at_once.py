@@ -1,7 +1,7 @@
 """A step's outputs recorded at once (cosim/recorder.py: one copy from the array the instances
 read their Real outputs into, one per instance with Boolean outputs) or, for a narrowed record,
 value by value, against the closed form of what Jacobi computes on the fake oscillator
-(tests/test_master_loop.py's system): every column, a narrowed and reordered record with an
+(tests/cosim/test_master_loop.py's system): every column, a narrowed and reordered record with an
 output read for a connection but not recorded, FMI 2.0's and FMI 3.0's Boolean types, the memory
 a narrowed record takes, and the run taken in stretches of any length (Master.steps)."""
 import ctypes

@@ -19,6 +19,7 @@ from sewfmu.scenarios.fmu_build.build import MODEL_CODE_DIR, build_fmu
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
 from tests.fmu_host import Host
+from tests.paths import REPO
 
 
 def _jacobi(sc):
@@ -27,7 +28,6 @@ def _jacobi(sc):
     return sc
 
 
-REPO = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(autouse=True)

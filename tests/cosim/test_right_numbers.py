@@ -17,11 +17,11 @@ from scipy.linalg import eigh
 from sewfmu.cli import main
 from sewfmu.components.carriage import CarriageModal, CarriageParams
 from sewfmu.console import explain
-from sewfmu.scenarios.mechanisms.base import RunTooShort
 from sewfmu.scenarios.cosim.divergence import Diverged, DivergenceWatch
 from sewfmu.scenarios.cosim.master import Master, run
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.mechanisms.base import RunTooShort
 from sewfmu.scenarios.runs.compare import monolithic_summary
 from sewfmu.scenarios.runs.results import run_scenario
 from sewfmu.scenarios.runs.runner import summarize

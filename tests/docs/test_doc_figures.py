@@ -9,11 +9,10 @@ figures (and says which promise it had to loosen)."""
 import importlib.util
 import re
 import sys
-from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parent.parent
+from tests.paths import REPO
 
 
 def _doc_figures():

@@ -15,8 +15,8 @@ from sewfmu.components.punch_linkage import PunchLinkageParams
 from sewfmu.components.punch_split import FabricParams, PunchBodyParams
 from sewfmu.components.shaft import ShaftParams
 from sewfmu.components.takeup import TakeupParams
+from tests.paths import REPO
 
-REPO = Path(__file__).resolve().parent.parent
 PAGES = {"punch_drive.md": (ShaftParams, PunchLinkageParams, PunchContactParams, PunchBodyParams,
                             FabricParams),
          "carriage.md": (CarriageParams, CarriageDriveParams),

@@ -1,6 +1,6 @@
 """Whatever a scenario file, an SSP archive or an FMU's modelDescription holds, sewfmu answers with
 a scenario or with one ScenarioError line: never another exception (hypothesis writes the files;
-the reference CSV and .opt parsers have theirs in tests/test_reference_files.py)."""
+the reference CSV and .opt parsers have theirs in tests/references/test_reference_files.py)."""
 import zipfile
 
 from hypothesis import HealthCheck, given, settings

@@ -7,7 +7,7 @@ from sewfmu.cli import main
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.results import run_scenario
-from tests.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
+from tests.cosim.test_reliability import PUNCH  # the catalogue's punch_drive.toml, as text
 
 RENAMED = {"shaft": "вал", "linkage": "рычаг", "punch": "ram"}
 

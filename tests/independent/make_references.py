@@ -4,7 +4,7 @@
 
 Nothing here imports sewfmu: each figure comes from tests/independent/<mechanism>.py, solved from
 the papers as docs/<mechanism>.md give them, with their defaults. For each
-scenario the file holds the parameters the reference assumed (tests/test_independent_figures.py
+scenario the file holds the parameters the reference assumed (tests/independent/test_figures.py
 checks that the run used the same), and for each figure its value, unit and how it was computed.
 The ODE references are solved twice, by DOP853 (the stored value) and by LSODA (a different
 family: Adams/BDF); their spread is quoted in the "how" text as the reference's own uncertainty.

@@ -14,14 +14,14 @@ solver spread is in figures.json's "how").
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import sewfmu
+from tests.paths import INDEPENDENT
 
-STORED = json.loads((Path(__file__).parent / "independent" / "figures.json").read_text())
+STORED = json.loads((INDEPENDENT / "figures.json").read_text())
 REFERENCES = STORED["scenarios"]
 
 # figures of a run that are about the run, not the physics

@@ -19,6 +19,8 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
+from tests.paths import REPO
+
 pytestmark = pytest.mark.slow
 
 HOSTILE = '<script>alert("x")</script> & \'quotes\''
@@ -134,7 +136,7 @@ def test_what_sewfmu_run_refuses_is_not_exported_in_one_line(tmp_path, fmu_dir, 
 
 def test_the_scenarios_description_is_escaped_in_the_fmus_page(tmp_path, fmu_dir):
     scenario = tmp_path / "hostile.toml"
-    source = Path(__file__).parent.parent / "scenarios" / "catalogue" / "punch_drive.toml"
+    source = REPO / "scenarios" / "catalogue" / "punch_drive.toml"
     text = source.read_text().splitlines()
     assert text[0].startswith("description = ")
     text[0] = 'description = """' + HOSTILE + '"""'

@@ -8,10 +8,10 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
 from sewfmu.components.carriage import CarriageDrive, CarriageModal, CarriageParams, flexibility
-from sewfmu.scenarios.mechanisms.carriage import periodic_response, resonance_study
-from sewfmu.scenarios.mechanisms.sampling import sampled
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.mechanisms.carriage import periodic_response, resonance_study
+from sewfmu.scenarios.mechanisms.sampling import sampled
 from sewfmu.scenarios.runs.runner import summarize
 
 

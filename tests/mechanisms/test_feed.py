@@ -7,10 +7,10 @@ import pytest
 
 from sewfmu.components.feed import FeedLinkage, FeedParams
 from sewfmu.components.kinematics import AssemblyError
-from sewfmu.scenarios.mechanisms.feed import ratio_study
-from sewfmu.scenarios.mechanisms.sampling import sampled
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.mechanisms.feed import ratio_study
+from sewfmu.scenarios.mechanisms.sampling import sampled
 from sewfmu.scenarios.runs.runner import summarize
 
 PHI1 = np.radians(np.arange(0.0, 360.0, 0.1))

@@ -8,10 +8,10 @@ import pytest
 
 from sewfmu.components.kinematics import AssemblyError, point_on_link
 from sewfmu.components.takeup import TakeupLinkage, TakeupParams
-from sewfmu.scenarios.mechanisms.sampling import sampled
-from sewfmu.scenarios.mechanisms.takeup import path_stroke, tolerance_study
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.format.loader import load
+from sewfmu.scenarios.mechanisms.sampling import sampled
+from sewfmu.scenarios.mechanisms.takeup import path_stroke, tolerance_study
 from sewfmu.scenarios.runs.runner import summarize
 
 THETA = np.radians(np.arange(0.0, 360.0, 0.25))

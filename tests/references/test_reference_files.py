@@ -4,7 +4,7 @@ reference never masks a deviation, a modelName never leads a write out of the fo
 whatever the bytes, reading gives a reference or a ScenarioError, nothing else.
 
 The FMU tests check sewfmu's Fabric FMU and a copy whose F2 is doubled (built from a modified
-copy of the model code, as tests/test_references.py changes gravity) against a reference of the
+copy of the model code, as tests/references/test_references.py changes gravity) against a reference of the
 original's."""
 import math
 import shutil

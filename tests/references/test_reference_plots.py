@@ -3,7 +3,7 @@ name the user's own file has in DIR is refused in one line, the file left byte f
 second check into DIR replaces the pictures the first drew there."""
 import pytest
 
-from tests.test_references import _sewfmu, _spring
+from tests.references.test_references import _sewfmu, _spring
 
 pytestmark = pytest.mark.slow           # FMUs built by pythonfmu, and sewfmu in a subprocess
 

@@ -22,7 +22,6 @@ from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.references import reference_check
 
 pytestmark = pytest.mark.slow
-REPO = Path(__file__).resolve().parent.parent
 
 _SPRING = '''
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
