@@ -8,11 +8,11 @@ run, sweep, compare, load, build and show do what the command line's commands of
 do (docs/api.md). Public: this module and sewfmu.components (the models); sewfmu.scenarios is
 internal (docs/architecture.md).
 """
-import sewfmu.scenarios  # noqa: F401  the internal package (empty) loaded first: see scenarios()
+import sewfmu.scenarios  # noqa: F401  the internal package: sewfmu.scenarios() of old (its __init__)
 from sewfmu._version import __version__
 
 __all__ = ["__version__", "run", "sweep", "compare", "load", "check", "build", "show", "parameters",
-           "scenarios", "read_value",
+           "catalogue", "read_value",
            "Run", "Sweep", "Scenario", "Instance", "Connection", "Error", "ScenarioError",
            "CosimError", "OutputError",
            "Diverged", "MissingExtra", "optimize", "fit", "sensitivity", "app"]
@@ -20,6 +20,7 @@ __all__ = ["__version__", "run", "sweep", "compare", "load", "check", "build", "
 # every public name, loaded on first use: `import sewfmu` (and so the command line) starts at
 # once and answers Ctrl-C from its first moment; name -> the module that defines it
 _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "check", "build", "show",
+                                            "catalogue",
                                             "parameters", "read_value", "Run", "Sweep", "Scenario",
                                             "ScenarioError", "InaccurateRun")},
          "Error": "sewfmu.errors",
@@ -33,14 +34,6 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
          # the design studies (docs/design.md)
          **{name: "sewfmu.design_api" for name in ("optimize", "fit", "sensitivity")},
          "app": "sewfmu.app"}             # the page (docs/app.md)
-
-
-def scenarios() -> list[str]:
-    """The names of the catalogue's scenarios. (Defined here, after the package sewfmu.scenarios
-    was loaded: loading it later would put the module under this name.)"""
-    from sewfmu.api import scenarios as names  # the API on first use
-
-    return names()
 
 
 def __getattr__(name: str):

@@ -23,20 +23,20 @@ from sewfmu.arguments import callback, flag, one_line, progress_of, whole
 from sewfmu.arguments import folder as _folder
 from sewfmu.errors import Error
 from sewfmu.scenarios.files.outputs import OutputError
-from sewfmu.scenarios.format.loader import catalogue
+from sewfmu.scenarios.format.loader import catalogue as catalogue_files
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values
 from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain
 from sewfmu.scenarios.mechanisms.base import figures_of
 
-__all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "scenarios",
+__all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "catalogue",
            "read_value", "Run", "Sweep", "Scenario", "ScenarioError"]
 
 
-def scenarios() -> list[str]:
+def catalogue() -> list[str]:
     """The names of the catalogue's scenarios."""
-    return sorted(catalogue())
+    return sorted(catalogue_files())
 
 
 @one_line

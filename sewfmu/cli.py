@@ -50,7 +50,7 @@ def cmd_list(args) -> None:
         doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__
         print(f"  {name:14s} {doc.strip().splitlines()[0]}")
     print("scenarios:")
-    for name in api.scenarios():
+    for name in api.catalogue():
         print(f"  {name:18s} {api.load(name).description}")
 
 

@@ -109,7 +109,7 @@ def test_references_work_from_a_plain_install_in_any_folder(plain_install, tmp_p
     assert f"all {len(FMUS)} FMI 2.0 FMUs match their references" in proc.stdout
 
 
-@pytest.mark.parametrize("name", sewfmu.scenarios())
+@pytest.mark.parametrize("name", sewfmu.catalogue())
 def test_show_prints_a_scenario_that_loads_back_unchanged(name, tmp_path):
     """`sewfmu show NAME > mine.toml`: the file is the same scenario (instances, parameters,
     connections, experiment, compare, sweep), under the new file's name."""
@@ -161,3 +161,22 @@ def test_a_loaded_scenario_is_not_changed_by_running_it_with_set(fmu_paths):
         pytest.approx(200.0, rel=1e-3)
     frame = pytest.importorskip("pandas") and r.to_pandas()
     assert frame.index.name == "time" and list(frame["punch.F2"]) == list(r.series["punch.F2"])
+
+
+def test_the_catalogue_is_listed_and_the_old_name_still_answers_for_a_release():
+    """sewfmu.catalogue() is every TOML of the catalogue's folder; sewfmu.scenarios is the
+    internal package again (what `import sewfmu.scenarios as s` gives), and calling it, as
+    earlier releases did, gives the same list with a DeprecationWarning."""
+    import importlib
+    import types
+
+    from sewfmu.scenarios.format import loader
+
+    folder = Path(loader.__file__).resolve().parents[1] / "catalogue"
+    names = sewfmu.catalogue()
+    assert names == sorted(p.stem for p in folder.glob("*.toml")) and "punch_drive" in names
+    package = importlib.import_module("sewfmu.scenarios")
+    assert sewfmu.scenarios is package and isinstance(package, types.ModuleType)
+    assert hasattr(package, "__path__")
+    with pytest.warns(DeprecationWarning, match="sewfmu.catalogue"):
+        assert sewfmu.scenarios() == names

@@ -164,7 +164,7 @@ def choices_of(named: list[str]) -> dict[str, str]:
     for item in named:
         sewfmu.load(item)                      # a bad file is one line now, not on the page
         chosen[item] = item
-    for name in sorted(sewfmu.scenarios(), key=lambda n: n != "punch_drive"):
+    for name in sorted(sewfmu.catalogue(), key=lambda n: n != "punch_drive"):
         chosen.setdefault(name, name)
     return chosen
 

@@ -17,7 +17,7 @@ def _fmus(fmu_dir, monkeypatch):
 
 
 def test_the_studies_are_in_the_catalogue_and_show_their_parameters():
-    assert set(STUDIES) <= set(sewfmu.scenarios())
+    assert set(STUDIES) <= set(sewfmu.catalogue())
     for name in STUDIES:
         assert f'study = "{name}"' in sewfmu.show(name)
         rows = sewfmu.parameters(name)
