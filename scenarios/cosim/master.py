@@ -67,6 +67,29 @@ def run(scenario: Scenario, fmu_paths: dict[str, Path], progress=None) -> RunRes
     return Master(scenario, fmu_paths).run(progress)
 
 
+def planned_steps(sc: Scenario) -> tuple[int, float]:
+    """The run's whole even steps (n, h), or the ScenarioError of a run refused before anything
+    loads: no step, a step longer than the run, more work than MAX_FMU_STEPS. sewfmu.check
+    (runs/checks.py) asks it too, so that a run it passes is not refused at its start."""
+    stop = sc.end_time()
+    if not sc.step > 0:          # an SSP system that gives none
+        raise ScenarioError(f"{sc.source}: no communication step: the file gives none; "
+                            f"pass --set experiment.step=…")
+    if sc.step > stop:
+        raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
+                            f"run ({stop:g} s)")
+    n_steps, h = sc.even_steps()
+    work = n_steps * max(1, len(sc.instances))
+    if work > MAX_FMU_STEPS:
+        hours = work * FMU_STEP_SECONDS / 3600
+        raise ScenarioError(f"{sc.source}: {n_steps:.3g} communication steps of "
+                            f"{len(sc.instances)} FMUs (end {stop:g} s at a step of "
+                            f"{sc.step:g} s) are {work:.3g} FMU steps, about {hours:.3g} "
+                            f"hours of stepping, more than the {MAX_FMU_STEPS:.0e} a run "
+                            f"may take; take a longer experiment.step or a shorter run")
+    return n_steps, h
+
+
 class Master:
     """Runs one scenario with the algorithm its experiment.master names.
 
@@ -159,21 +182,7 @@ class Master:
     def _open(self) -> None:
         sc = self.scenario
         self.stop = sc.end_time()
-        if not sc.step > 0:          # an SSP system that gives none
-            raise ScenarioError(f"{sc.source}: no communication step: the file gives none; "
-                                f"pass --set experiment.step=…")
-        if sc.step > self.stop:
-            raise ScenarioError(f"{sc.source}: experiment.step {sc.step:g} s is longer than the "
-                                f"run ({self.stop:g} s)")
-        self.n_steps, self.h = sc.even_steps()
-        work = self.n_steps * max(1, len(sc.instances))
-        if work > MAX_FMU_STEPS:
-            hours = work * FMU_STEP_SECONDS / 3600
-            raise ScenarioError(f"{sc.source}: {self.n_steps:.3g} communication steps of "
-                                f"{len(sc.instances)} FMUs (end {self.stop:g} s at a step of "
-                                f"{sc.step:g} s) are {work:.3g} FMU steps, about {hours:.3g} "
-                                f"hours of stepping, more than the {MAX_FMU_STEPS:.0e} a run "
-                                f"may take; take a longer experiment.step or a shorter run")
+        self.n_steps, self.h = planned_steps(sc)
         # a setting the master cannot honour is refused here, before any FMU is loaded
         self.algorithm = algorithm = ALGORITHMS[sc.master](sc.settings())
         self.every = max(1, int(sc.record_every))

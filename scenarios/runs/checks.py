@@ -2,7 +2,8 @@
 against its FMU's declared type and range (cosim/system.check_parameters, from the
 modelDescriptions of the FMU files, built first if out of date); for sewfmu's own FMUs also the
 sign and range each parameter is checked against when the FMU initializes (a stiffness of 0 is
-within the declared [0, 1e9] and still refused there); and the run's steps.
+within the declared [0, 1e9] and still refused there); and the run's steps and their number,
+as the master refuses them (cosim/master.planned_steps).
 `sewfmu.check` and a sweep's check of every point before the first one runs."""
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 from sewfmu.components.parameters import ParameterError, check_value, parameter_info
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim.instances import extracted_fmu
+from sewfmu.scenarios.cosim.master import planned_steps
 from sewfmu.scenarios.cosim.system import check_parameters
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.parameter_table import slave_class
@@ -37,4 +39,4 @@ def check_values(scenario: Scenario, paths: dict | None = None) -> None:
                     raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: {inst.name} "
                                         f"({inst.fmu}) refuses it: {err}") from None
     if scenario.study is None:
-        scenario.even_steps()                     # a step that makes no countable run
+        planned_steps(scenario)         # the run's size: a step of 1e-12 s is refused here too

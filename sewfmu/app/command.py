@@ -17,7 +17,9 @@ def add_command(sub) -> None:
                    help="the address to serve on (default 127.0.0.1: this machine only)")
     p.add_argument("--allow-host", action="append", default=[], metavar="NAME[:PORT]",
                    help="answer requests that name this host too (a name or address of this "
-                        "machine, or a proxy's); repeatable. Needed with --host 0.0.0.0")
+                        "machine, or a proxy's); repeatable. Needed with --host 0.0.0.0. NAME "
+                        "alone: read on any port, changed (Run) only from http://NAME on --port; "
+                        "a proxy's origin as NAME:PORT (e.g. NAME:443)")
     p.add_argument("--max-request-mb", type=_megabytes, default=4.0, metavar="MB",
                    help="the largest request body read, in MiB (default 4)")
     p.add_argument("--open", action="store_true", help="open the page in the browser")

@@ -7,18 +7,21 @@
   (a page on another site that posts a Run sends its own; a client that sends neither is no
   browser, which always sends Origin with a POST, and could as well send any header it likes);
 - its body is at most `max_body` bytes: a longer Content-Length is refused before a byte is
-  read, and so is a body of no stated length (chunked);
+  read, and so is a body of no stated length (chunked), or a length that is not ASCII digits;
+- a body the app names a check for (Dash's callback route: callback_body.py) is read and
+  checked before the app reads it, and refused 400 in one line if it is not what that route
+  takes;
 - every answer says how a browser may use it: not as another site's resource, nor in a frame.
 
 A WSGI middleware, so that it holds for every route: the page, its assets, Dash's routes, the
 files of runs, and the 404s."""
 from __future__ import annotations
 
+import io
 import ipaddress
 import re
 import socket
 from dataclasses import dataclass, field
-from urllib.parse import urlsplit
 
 import sewfmu
 
@@ -33,7 +36,12 @@ HEADERS = [("X-Content-Type-Options", "nosniff"),
            ("X-Frame-Options", "DENY"),
            ("Content-Security-Policy", "frame-ancestors 'none'"),
            ("Referrer-Policy", "same-origin")]
+# ASCII only ([0-9], not \d nor str.isdigit: "²".isdigit() is True and int("²") raises)
 _HOST = re.compile(r"(\[[0-9a-fA-F:.]+\]|[A-Za-z0-9._-]+)(?::([0-9]{1,5}))?")
+# an Origin (scheme://host[:port]) or a Referer (the same, then its path): no user, no spaces
+_ORIGIN = re.compile(r"(https?)://([^/?#@\s]+)([/?#].*)?", re.DOTALL)
+_LENGTH = re.compile(r"[0-9]{1,18}")
+_OWS = " \t"          # the only blanks HTTP allows around a header's value
 
 
 @dataclass(frozen=True)
@@ -41,8 +49,12 @@ class Allowed:
     """The hosts a request may name: `names` on the server's `port` (None: on any, as for a
     test client), `anywhere` on any port (--allow-host NAME, e.g. a proxy's), `exact` (name,
     port) pairs (--allow-host NAME:PORT). A Host header without a port (the client's default
-    port: a port-forward or a proxy may have changed it) passes on its name alone; an origin
-    always has its port (80 or 443 where it names none)."""
+    port: a port-forward or a proxy may have changed it) passes on its name alone.
+
+    An origin is a site: its scheme, name and port (80 or 443 where it names none) all count.
+    `names` and `anywhere` are origins only as http on the server's own port (another port of
+    the same name is another program, another site); an `exact` pair on its port, http or
+    https (a proxy's)."""
     names: frozenset
     port: int | None = None
     anywhere: frozenset = field(default_factory=frozenset)
@@ -56,16 +68,21 @@ class Allowed:
             name in self.anywhere or (name, port) in self.exact
 
     def admits_origin(self, url: str) -> bool:
-        """An Origin or Referer that names an allowed host (scheme http or https)."""
+        """An Origin or Referer that is this server's own site, or an --allow-host NAME:PORT
+        (see the class): ASCII as browsers send it, scheme http or https."""
+        found = _ORIGIN.fullmatch(url) if url.isascii() else None
+        if found is None:
+            return False
+        scheme = found.group(1)
         try:
-            parts = urlsplit(url)
-            port = parts.port
+            name, port = split_host(found.group(2), blanks="")
         except ValueError:
             return False
-        if parts.scheme not in ("http", "https") or not parts.hostname:
-            return False
-        port = port if port is not None else {"http": 80, "https": 443}[parts.scheme]
-        return self.admits(_bare(parts.hostname), port)
+        port = port if port is not None else {"http": 80, "https": 443}[scheme]
+        if (name, port) in self.exact:
+            return True
+        return scheme == "http" and (name in self.names or name in self.anywhere) and \
+            (self.port is None or port == self.port)
 
 
 def allowed_hosts(host: str, port: int | None, allow: list[str] | tuple = ()) -> Allowed:
@@ -119,10 +136,11 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-def split_host(text: str) -> tuple[str, int | None]:
+def split_host(text: str, blanks: str = _OWS) -> tuple[str, int | None]:
     """A Host header (or --allow-host) as (name, port or None): the name lowercase, an IPv6
-    address without its brackets. ValueError for anything else (a path, a scheme, a bad port)."""
-    found = _HOST.fullmatch(text.strip())
+    address without its brackets. ValueError for anything else (a path, a scheme, a port that
+    is not 1 to 65535 in ASCII digits). `blanks`: what may stand around it."""
+    found = _HOST.fullmatch(text.strip(blanks))
     if not found or (found.group(2) is not None and not 1 <= int(found.group(2)) <= 65535):
         raise ValueError(text)
     name = found.group(1).lower()
@@ -146,18 +164,20 @@ def _bare(name: str) -> str:
 
 
 class Guard:
-    """The WSGI app `app` behind the checks above."""
+    """The WSGI app `app` behind the checks above. `bodies`: path -> check(body, content
+    type) of a POST's body to that path, giving the line that refuses it or None."""
 
-    def __init__(self, app, allowed: Allowed, max_body: int):
+    def __init__(self, app, allowed: Allowed, max_body: int, bodies: dict | None = None):
         self.app = app
         self.allowed = allowed
         self.max_body = max_body
+        self.bodies = dict(bodies or {})
 
     def __call__(self, environ, start_response):
         # the server's hook (serve._Quiet): the client's input is read no further after the
         # answer, but for a moment and a bounded amount, where werkzeug reads on to 10 GB
         stop = environ.get("sewfmu.stop_reading", _nothing)
-        refused = self.refusal(environ)
+        refused = self.refusal(environ) or self.body_refusal(environ)
         if refused is not None:
             stop()
             status, line = refused
@@ -195,15 +215,28 @@ class Guard:
             # reading of it (werkzeug's) reads a chunk's size line without a bound
             return "411 Length Required", ("refused: a body without Content-Length "
                                            "(chunked); send it with its length")
-        length = environ.get("CONTENT_LENGTH", "").strip()
+        length = environ.get("CONTENT_LENGTH", "").strip(_OWS)
         if length:
-            if not length.isdigit() or len(length) > 18:
+            if not _LENGTH.fullmatch(length):      # "²", "+1", "1e9", 19 digits and more
                 return "400 Bad Request", "refused: Content-Length is not a number of bytes"
             if int(length) > self.max_body:
                 return "413 Request Entity Too Large", (
                     f"refused: a body of {int(length)} bytes; this server reads at most "
                     f"{self.max_body} (sewfmu app --max-request-mb)")
         return None
+
+    def body_refusal(self, environ) -> tuple[str, str] | None:
+        """(400, one line) for a POST whose body its path's check refuses, or None; the body
+        read (refusal() has bounded its length) and put back for the app."""
+        check = self.bodies.get(environ.get("PATH_INFO", ""))
+        if check is None or environ.get("REQUEST_METHOD", "GET").upper() != "POST":
+            return None
+        length = int(environ.get("CONTENT_LENGTH", "").strip(_OWS) or 0)
+        data = environ["wsgi.input"].read(length) if length else b""
+        environ["wsgi.input"] = io.BytesIO(data)
+        environ["CONTENT_LENGTH"] = str(len(data))
+        line = check(data, environ.get("CONTENT_TYPE", ""))
+        return None if line is None else ("400 Bad Request", line)
 
 
 def _then(answer, stop):

@@ -71,8 +71,12 @@ def _context():
 
 
 class Jobs:
-    def __init__(self, root: Path, warm: str | None = None):
+    """`check(kind, request)`, if given, is asked before a job's process starts: a sewfmu.Error
+    it raises is the job refused, nothing started."""
+
+    def __init__(self, root: Path, warm: str | None = None, check=None):
         self.root = Path(root)
+        self.check = check
         self._jobs: dict[str, Job] = {}
         self._lock = threading.Lock()
         self._ctx = _context()
@@ -107,6 +111,8 @@ class Jobs:
 
     def start(self, kind: str, request: dict, folder: str | None = None) -> str:
         """A new job; its files under root/<its id>, or root/<folder> (a run's report)."""
+        if self.check is not None:
+            self.check(kind, request)
         job_id = secrets.token_hex(8)
         job = Job(job_id, kind, request, total=len(request.get("points", [])) or 0)
         where = str(self.root / (folder or job_id))

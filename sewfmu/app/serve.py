@@ -13,6 +13,7 @@ import tempfile
 import threading
 import time
 import webbrowser
+from functools import partial
 from pathlib import Path
 
 import dash
@@ -21,12 +22,14 @@ from flask import abort, send_file
 from werkzeug.serving import WSGIRequestHandler, make_server
 
 import sewfmu
+from sewfmu.app.callback_body import ROUTE
+from sewfmu.app.callback_body import refusal as callback_refusal
 from sewfmu.app.callbacks import failed, register, values_of_choice
 from sewfmu.app.files import result_file
 from sewfmu.app.guard import MAX_BODY_MB, Allowed, Guard, allowed_hosts, check_hosts, is_loopback
 from sewfmu.app.jobs import Jobs
 from sewfmu.app.layout import page as page_layout
-from sewfmu.app.values import changed_values, command_line, short_run
+from sewfmu.app.values import changed_values, check_points, command_line, short_run
 
 ASSETS = Path(__file__).resolve().parent / "assets"
 
@@ -38,11 +41,12 @@ class Page:
                  workers: int | None = None):
         self.choices = choices                # label on the page -> catalogue name or path
         self.root = root
-        first = next(iter(choices.values()), None)      # the scenario the page shows first
-        self.jobs = Jobs(root, warm=first)    # the first run's process made ready now
         # one check at a time in this process: two at once (the warm-up and a first click, two
         # tabs) extract the same FMU into the cache under the same process's scratch name
         self._checking = threading.Lock()
+        first = next(iter(choices.values()), None)      # the scenario the page shows first
+        # the first run's process made ready now; a sweep's points checked before it starts
+        self.jobs = Jobs(root, warm=first, check=self.check_job)
         if first is not None:         # the first check of a value (FMUs' descriptions, units)
             threading.Thread(target=_warm_checks, args=(first, self._checking),
                              daemon=True).start()
@@ -56,6 +60,13 @@ class Page:
         with self._checking:
             return changed_values(self.choices[label], typed,
                                   defaults if isinstance(defaults, dict) else {})
+
+    def check_job(self, kind: str, request: dict) -> None:
+        """Before a job's process starts: a sweep's every point, as Run checks its values (a
+        sweep's bad point would otherwise start a process that ends in its error)."""
+        if kind == "sweep":
+            with self._checking:
+                check_points(request["source"], request["changed"], request["grid"])
 
     def request(self, label: str, changed: dict) -> dict:
         source = self.choices[label]
@@ -120,8 +131,10 @@ def create(page: Page, allowed: Allowed | None = None, max_body_mb: float = MAX_
     max_body = int(max_body_mb * 2**20)
     # Flask's own limit too, for any body the Guard has let through (it checks the same length)
     app.server.config["MAX_CONTENT_LENGTH"] = max_body
+    # a callback's body checked against the page's callbacks (callback_body.py) before Dash
+    # reads it: Dash answers a malformed one 500, its traceback on the terminal
     app.server.wsgi_app = Guard(app.server.wsgi_app, allowed or allowed_hosts("127.0.0.1", None),
-                                max_body)
+                                max_body, {ROUTE: partial(_callback_refusal, app)})
     first = next(iter(page.choices), None)
     app.layout = page_layout(list(page.choices), values_of_choice(page, first))
     register(app, page)
@@ -153,6 +166,10 @@ def create(page: Page, allowed: Allowed | None = None, max_body_mb: float = MAX_
     return app
 
 
+def _callback_refusal(app: dash.Dash, data: bytes, content_type: str) -> str | None:
+    return callback_refusal(data, content_type, app.callback_map)
+
+
 _MIME = {".csv": "text/csv", ".json": "application/json", ".html": "text/html",
          ".toml": "text/plain", ".txt": "text/plain"}
 
@@ -174,6 +191,7 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
           allow_hosts=(), max_request_mb: float = MAX_BODY_MB) -> None:
     """Serve the page until SIGINT or SIGTERM."""
     allowed = allowed_hosts(host, port, check_hosts(host, allow_hosts))
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host   # [::1]: ::1
     choices = choices_of(list(scenarios))
     root = Path(tempfile.mkdtemp(prefix="sewfmu_app_"))
     page = Page(choices, root, scheduler, workers)
@@ -188,7 +206,7 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
         stop = threading.Event()
         before = {s: signal.signal(s, lambda *_: stop.set())
                   for s in (signal.SIGINT, signal.SIGTERM)}
-        url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{server.port}/"
+        url = page_url(host, server.port)
         if host not in ("127.0.0.1", "localhost", "::1"):
             where = "" if is_loopback(host) else f" (from {_names(allowed)})"
             print(f"sewfmu: warning: serving on {host}: anyone who reaches port {server.port}"
@@ -214,6 +232,16 @@ def serve(scenarios=(), port: int = 8050, host: str = "127.0.0.1", open_browser:
     print("sewfmu app: stopped; every run's process ended", flush=True)
 
 
+def page_url(host: str, port: int) -> str:
+    """The page's address for a browser on this machine: an IPv6 address in brackets (a zone's
+    % as %25), every address as its loopback."""
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    host = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}.get(host, host)
+    if ":" in host:
+        host = f"[{host.replace('%', '%25')}]"
+    return f"http://{host}:{port}/"
+
+
 def _free(host: str, port: int) -> None:
     """Raise OSError if the port is taken (werkzeug would print two lines and exit)."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
@@ -223,8 +251,10 @@ def _free(host: str, port: int) -> None:
 
 
 def _names(allowed: Allowed) -> str:
-    return ", ".join(sorted({*allowed.names, *allowed.anywhere,
-                             *(f"{n}:{p}" for n, p in allowed.exact)}))
+    def named(name: str) -> str:            # an IPv6 address as a browser's address bar has it
+        return f"[{name}]" if ":" in name else name
+    return ", ".join(sorted({*map(named, allowed.names), *map(named, allowed.anywhere),
+                             *(f"{named(n)}:{p}" for n, p in allowed.exact)}))
 
 
 class _Quiet(WSGIRequestHandler):

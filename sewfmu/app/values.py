@@ -4,6 +4,7 @@
 shows. Also what reproduces a run: its command line and its scenario as TOML."""
 from __future__ import annotations
 
+import itertools
 import math
 import shlex
 import tomllib
@@ -81,6 +82,22 @@ def changed_values(source: str, typed: dict[str, str], defaults: dict[str, str])
     # as a run checks them before its first step (declared ranges too): a bad value starts nothing
     checked(sewfmu.check, source, {name: value_of(text) for name, text in changed.items()})
     return changed
+
+
+def check_points(source: str, changed: dict[str, str], grid: dict[str, list]) -> None:
+    """Every point of a sweep (the changed values, then one value of each swept parameter)
+    checked as a run checks its values before its first step (sewfmu.check: declared ranges,
+    what the FMU refuses, the run's size), before the sweep's process starts: the first bad one
+    a sewfmu.Error naming the point. About a millisecond a point."""
+    base = {name: value_of(text) for name, text in changed.items()}
+    names = list(grid)
+    for values in itertools.product(*(grid[name] for name in names)):
+        point = dict(zip(names, values))
+        try:
+            checked(sewfmu.check, source, {**base, **point})
+        except sewfmu.Error as err:
+            where = ", ".join(f"{name} = {shown(value)}" for name, value in point.items())
+            raise _error(f"sweep point {where}: {' '.join(str(err).split())}") from None
 
 
 # characters of a typed value the page reads ("-1.2345678901234567e-300 rad/s" is 31): a longer
