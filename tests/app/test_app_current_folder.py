@@ -57,7 +57,9 @@ def test_a_run_from_the_page_imports_nothing_from_the_current_folder(tmp_path):
                      {"scenario": "punch_drive", "runs": [], "defaults": {}})
         status, answer = _request(port, "/_dash-update-component", body)
         assert status == 200, answer[:300]
-        job = answered(answer)["job"]["data"]
+        got = answered(answer)
+        job = got.get("job", {}).get("data")
+        assert job, got                 # the alert says why the run did not start
         # the run's folder appears whole when the run has written its files, never on a failure
         end = time.monotonic() + WAIT
         while not list(tmp_path.glob(f"sewfmu_app_*/{job}/summary.json")):
