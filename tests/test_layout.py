@@ -234,3 +234,33 @@ def test_every_sewfmu_import_in_the_tree_resolves():
                             missing.append(f"{path.relative_to(REPO)}:{node.lineno}: "
                                            f"{node.module}.{alias.name}")
     assert not missing, missing
+
+
+# the tests lie in folders by wing (and hosts/ for other FMI tools, independent/ for the
+# references that share no code with sewfmu); at the top only what guards the package as a whole
+TEST_FOLDERS = {"app", "components", "cosim", "design", "docs", "format", "hosts", "independent",
+                "interop", "mechanisms", "references", "runs"}
+TOP_TESTS = {"test_extras.py", "test_layout.py", "test_library.py", "test_public_api_arguments.py"}
+MAX_TEST_LINES = 600
+
+
+def test_the_tests_lie_in_folders_by_wing():
+    tests = REPO / "tests"
+    folders = {p.name for p in tests.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert folders == TEST_FOLDERS, folders ^ TEST_FOLDERS
+    assert {p.name for p in tests.glob("test_*.py")} <= TOP_TESTS
+    long = {str(p.relative_to(tests)): n for p in tests.rglob("test_*.py")
+            if (n := len(p.read_text().splitlines())) > MAX_TEST_LINES}
+    assert not long, long
+
+
+def test_every_import_path_is_a_path_on_disk():
+    """sewfmu/scenarios and sewfmu/components are links to the folders at the top, so that a
+    reader's tools (grep by path, an editor without the install) find `sewfmu.scenarios.format.
+    values` at sewfmu/scenarios/format/values.py."""
+    for name in ("scenarios", "components"):
+        link = REPO / "sewfmu" / name
+        assert link.is_symlink() and link.resolve() == (REPO / name).resolve(), link
+    for module in ("sewfmu.scenarios.format.values", "sewfmu.components.punch_contact",
+                   "sewfmu.scenarios.mechanisms.punch"):
+        assert (REPO / (module.replace(".", "/") + ".py")).is_file(), module
