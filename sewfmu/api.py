@@ -14,6 +14,7 @@ with one line that says what is wrong. docs/api.md shows every function at work.
 """
 from __future__ import annotations
 
+import contextlib
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,7 +23,7 @@ from typing import Any, Callable, Mapping
 from sewfmu.arguments import callback, flag, one_line, progress_of, whole
 from sewfmu.arguments import folder as _folder
 from sewfmu.errors import Error
-from sewfmu.scenarios.files.outputs import OutputError
+from sewfmu.scenarios.files.outputs import cannot_write, held
 from sewfmu.scenarios.format.loader import catalogue as catalogue_files
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
@@ -65,6 +66,10 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
     if set is not None and not isinstance(set, Mapping):
         raise ScenarioError(f"set: expected a dict of 'instance.parameter': value, got "
                             f"{type(set).__name__}")
+    if set and {"experiment.revolutions", "experiment.stop_time"} <= {str(k).strip() for k in set}:
+        from sewfmu.scenarios.runs.sweep import refuse_two_lengths  # only when both are given
+
+        refuse_two_lengths({k: "set=" for k in set})      # a run's length: exactly one of them
     for target, value in (set or {}).items():
         loaded.set_value(str(target), value, origin="set")
     return loaded
@@ -221,20 +226,22 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     progress = progress_of(progress)
     if (plot or animate or report) and out is None:
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
-    if sc.study:
-        return _study_run(sc, out, plot, animate, report)
-    bar = TerminalProgress(sc.name) if progress is True else None
-    told = (lambda label, done, total: progress(done, total)) if callable(progress) else bar
-    try:
-        runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, told)
-    finally:
-        if bar is not None:
-            bar.close()
-    if out is not None:
+    # the folder is this run's from its first step to its last file (a sweep's is refused)
+    with held(Path(out)) if out is not None else contextlib.nullcontext():
+        if sc.study:
+            return _study_run(sc, out, plot, animate, report)
+        bar = TerminalProgress(sc.name) if progress is True else None
+        told = (lambda label, done, total: progress(done, total)) if callable(progress) else bar
         try:
-            write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
-        except OSError as err:
-            raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
+            runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, told)
+        finally:
+            if bar is not None:
+                bar.close()
+        if out is not None:
+            try:
+                write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
+            except OSError as err:
+                raise cannot_write(err, out) from None
     out = Path(out) if out is not None else None
     each = {label: _run_of(label or sc.name, result, own, out, sc.shaft or sc.default_shaft())
             for label, result, own in runs}
@@ -259,7 +266,7 @@ def _study_run(sc: Scenario, out, plot: bool, animate: bool, report: bool) -> Ru
     try:
         data, summary = run_study(sc, Path(out) if out is not None else None, plot, report)
     except OSError as err:
-        raise OutputError(f"out={out}: cannot write there: {err.strerror or err}") from None
+        raise cannot_write(err, out) from None
     return Run(sc.name, summary, None, dict(summary["units"]),
                Path(out) if out is not None else None, study=data)
 
@@ -347,9 +354,12 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     from sewfmu.scenarios.runs import budget  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
         count_points,
+        declared_unit,
         points_of,
         refuse_fixed_and_varied,
+        refuse_lengths_given_twice,
         run_sweep,
+        seconds_of_points,
         sweep_pictures,
     )
 
@@ -363,6 +373,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     refuse_fixed_and_varied(set, [*spec.get("grid", {}), *(k for p in spec.get("points", [])
                                                            for k in p)],
                             "swept", f"the [sweep] table of {sc.source}")
+    refuse_lengths_given_twice(sc, set, grid)   # one set, the other swept: one ignored
     if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
         raise ScenarioError(f"scheduler: expected a Dask scheduler's address such as "
                             f"'tcp://127.0.0.1:8786', got {scheduler!r}")
@@ -372,14 +383,17 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     out = _folder(out, "out")
     plot, report, results = flag(plot, "plot"), flag(report, "report"), flag(results, "results")
     progress, on_point = flag(progress, "progress"), callback(on_point, "on_point")
-    # counted from the axes' lengths, before a value list or a point is made
-    count, cause = count_points(sc, {k: _length(v, f"grid {k}") for k, v in grid.items()})
+    # counted from the axes' lengths before a list or a point is made (a generator: to the bound)
+    limit, what = budget.max_runs(max_runs), f"sweep {sc.name}"
+    grid = {k: budget.counted(v, f"grid {k}", limit, what) for k, v in grid.items()}
+    count, cause = count_points(sc, {k: n for k, (n, _) in grid.items()})
     per_run = budget.seconds_per_run(sc) if scheduler is None else None
     parallel = budget.cpu_workers(workers)
-    budget.check(count, f"sweep {sc.name}", budget.max_runs(max_runs), cause, per_run, parallel)
-    budget.announce(f"sweep {sc.name}", count, per_run, parallel, shown=bool(progress))
-    grid = {k: grid_values(v, f"grid {k}") for k, v in grid.items()}
+    budget.check(count, what, limit, cause, per_run, parallel)
+    grid = {k: grid_values(v, f"grid {k}") for k, (_, v) in grid.items()}
     points = points_of(sc, grid)
+    # each point's own steps (its step, length, speed), said before the first run
+    per_run = budget.mean_seconds(seconds_of_points(sc, points)) if scheduler is None else None
     swept = [name for name, _ in points[0].values]
     if (plot or report) and out is None:
         raise ScenarioError("plot and report are files: give out= a folder for them")
@@ -396,36 +410,19 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         try:
             rows = run_sweep(sc, points, folder, workers=workers, scheduler=scheduler,
                              keep_results=results and out is not None, progress=progress,
-                             on_point=on_point, outputs=drawn, finish=pictures)
+                             on_point=on_point, outputs=drawn, finish=pictures,
+                             announce=lambda: budget.announce(what, count, per_run, parallel,
+                                                              shown=bool(progress)))
         except OSError as err:
-            raise OutputError(f"out={folder}: cannot write there: {err.strerror or err}") \
-                from None
+            raise cannot_write(err, folder) from None
         if rows and all(r["status"] != "ok" for r in rows):
             raise SweepFailed(f"every point of the sweep failed ({len(rows)} of {len(rows)}; "
                               f"the first: {rows[0]['error']})"
                               + (f"; see {folder}/sweep.csv" if out is not None else ""), rows)
-    units = {target: _unit_of(sc, target) for target in swept}
+    units = {target: declared_unit(sc, target) for target in swept}
     units.update({"stop_time": "s", "wall_time_s": "s", **sc.figure_units()})
     units = {k: u for k, u in units.items() if any(k in r for r in rows)}
     return Sweep(sc.name, swept, rows, units, Path(out) if out is not None else None)
-
-
-def _length(values, where: str) -> int:
-    """How many values a grid gives a parameter, without a copy of them where they say it."""
-    if isinstance(values, str) or not hasattr(values, "__len__"):
-        return len(grid_values(values, where))      # a text list, one value, a generator
-    return len(values)
-
-
-def _unit_of(sc: Scenario, target: str) -> str:
-    """The unit of a swept `instance.parameter` (as its FMU declares it) or experiment key."""
-    from sewfmu.scenarios.format.declared_units import parameter_units  # on first use
-
-    inst, _, key = target.partition(".")
-    if inst == "experiment":
-        return {"step": "s", "stop_time": "s", "revolutions": "rev"}.get(key, "")
-    fmu = sc.instances[inst].fmu
-    return "" if fmu in sc.fmu_files else parameter_units(fmu).get(key, "")
 
 
 @one_line

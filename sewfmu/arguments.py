@@ -26,9 +26,18 @@ def folder(value: Any, name: str) -> Path | None:
         if path.exists() and not path.is_dir():
             raise ScenarioError(f"{name}: {path} exists and is not a folder")
     except OSError as err:          # a name too long, a loop of links, no permission
-        raise OutputError(f"{name}: {short(str(value))} cannot be a folder: "
+        raise OutputError(f"{name}: {path_text(value)} cannot be a folder: "
                           f"{err.strerror or err}") from None
     return path
+
+
+def path_text(path: Any) -> str:
+    """A path for a message, quoted: whole, so that the user finds the file (short() cut
+    every path over 40 characters); only one longer than any path can be is cut, its
+    length said."""
+    text = str(path)
+    return repr(text) if len(text) <= 4096 else f"{text[:200]!r}...{text[-60:]!r} " \
+        f"({len(text):,} characters)"
 
 
 def flag(value: Any, name: str) -> bool:
@@ -60,7 +69,7 @@ def one_line(function: Callable) -> Callable:
         try:
             return function(*args, **kwargs)
         except OSError as err:
-            where = f"{short(str(err.filename))}: " if err.filename is not None else ""
+            where = f"{path_text(err.filename)}: " if err.filename is not None else ""
             raise OutputError(f"{function.__name__}: {where}"
                               f"{' '.join(str(err.strerror or err).split())}") from None
     return guarded

@@ -32,8 +32,13 @@ def _set_values(sets: list[str]) -> dict:
 
 
 def _load_with_sets(name: str, sets: list[str]):
+    values = _set_values(sets)
+    if len({"experiment.revolutions", "experiment.stop_time"} & set(values)) == 2:
+        from sewfmu.scenarios.runs.sweep import refuse_two_lengths  # only when both are given
+
+        refuse_two_lengths({k: "--set" for k in values})
     scenario = load(name)
-    for target, value in _set_values(sets).items():
+    for target, value in values.items():
         scenario.set_value(target, value)
     return scenario
 

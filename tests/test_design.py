@@ -134,11 +134,18 @@ def test_a_target_is_met_and_a_study_run_again_resumes(tmp_path):
     again = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
                             target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
     assert again.computed == 0 and again.best == found.best          # nothing run again
-    # an interrupted study: its record cut after two evaluations, the last line torn
+    # an interrupted study: its record listed before the first run (as a study does), then
+    # two evaluations appended and the last line torn
+    from sewfmu.scenarios.files.outputs import Record, claim  # as the study writes it
+
     lines = (out / "evaluations.csv").read_text().splitlines(keepends=True)
-    (out / "evaluations.csv").write_text("".join(lines[:3]) + lines[3][:25])
+    (tmp_path / "killed").mkdir()
+    claim(tmp_path / "killed", ["evaluations.csv"])
+    with Record(tmp_path / "killed" / "evaluations.csv") as record:
+        record.write("".join(lines[:3]) + lines[3][:25])
     resumed = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
-                              target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
+                              target={"F2_weld_mean": "25 N"}, set=SHORT,
+                              out=tmp_path / "killed")
     assert resumed.computed == len(found.evaluations) - 2 and resumed.best == found.best
 
 

@@ -43,10 +43,12 @@ def test_a_fit_run_again_resumes_from_its_record(tmp_path):
         first.evaluations and again.evaluations == 1 + again.summary["reused_evaluations"]
     assert again.estimates == first.estimates                 # the same path, bit for bit
     assert again.standard_errors == first.standard_errors
-    # killed after three runs, its last line torn: the rest runs, the answer is the same
-    (out / "fit_evaluations.jsonl").write_text("\n".join(record[:4]) + "\n" + record[4][:40])
+    # killed after three runs, its last line torn (what a fit killed in a new folder leaves:
+    # its record listed before its first run, then appended to): the rest runs, the same answer
+    killed = _killed_record(tmp_path / "killed", "fit_evaluations.jsonl",
+                            "\n".join(record[:4]) + "\n" + record[4][:40])
     resumed = sewfmu.fit("punch_drive", data=tmp_path / "trace.csv",
-                         free={"punch.b2": "20..300"}, out=out)
+                         free={"punch.b2": "20..300"}, out=killed)
     assert resumed.estimates == first.estimates
     assert resumed.summary["computed"] == first.evaluations - 3   # the optimum among them
 
@@ -93,7 +95,7 @@ def test_a_second_study_into_a_folder_in_use_is_refused(tmp_path):
     other.start()
     try:
         assert ready.wait(60)
-        with pytest.raises(OutputError, match="another sewfmu sweep or study is writing"):
+        with pytest.raises(OutputError, match="another sewfmu command .a run, sweep or study. is writing"):
             with held(tmp_path):
                 pass
         for study in (lambda: sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
@@ -267,12 +269,24 @@ def test_a_target_given_twice_is_refused(capsys):
     assert "--target F2_weld_mean: given twice" in capsys.readouterr().err
 
 
+def _killed_record(folder, name: str, text: str):
+    """A folder as a study killed in it leaves it: its record listed in the manifest before
+    the first run (outputs.claim), then `text` appended to it as the study appends."""
+    from sewfmu.scenarios.files.outputs import Record, claim  # as the study writes it
+
+    folder.mkdir()
+    claim(folder, [name])
+    with Record(folder / name) as record:
+        record.write(text)
+    return folder
+
+
 def test_a_torn_last_line_is_cut_off_before_the_record_goes_on(tmp_path):
     out = tmp_path / "s"
     first = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
                             target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
     lines = (out / "evaluations.csv").read_text().splitlines(keepends=True)
-    (out / "evaluations.csv").write_text("".join(lines[:3]) + lines[3][:25])
+    out = _killed_record(tmp_path / "killed", "evaluations.csv", "".join(lines[:3]) + lines[3][:25])
     again = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
                             target={"F2_weld_mean": "25 N"}, set=SHORT, out=out)
     assert again.best == first.best

@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from sewfmu.cli import main
+from sewfmu.scenarios.files.outputs import OutputError, Record, claim
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
@@ -129,13 +130,10 @@ def test_a_rerun_with_other_settings_recomputes_and_one_with_the_same_reuses(tmp
     # the table holds the last run's settings only: no mix
     assert [float(r["F2_weld_mean"]) for r in _table(tmp_path)] == \
         [r["F2_weld_mean"] for r in stiffer]
-    # back to the first settings: reused, not recomputed (a mark in the log survives)
-    rows = _log_rows(tmp_path)
-    for row in rows[:4]:
-        row["F2_weld_mean"] = -1.0
-    (tmp_path / POINTS_FILE).write_text("".join(json.dumps(r) + "\n" for r in rows))
+    # back to the first settings: reused, not recomputed (nothing appended to the record, which
+    # is the sweep's own: not edited here)
     again = run_sweep(_scenario(), points, tmp_path, workers=2, progress=False)
-    assert [r["F2_weld_mean"] for r in again] == [-1.0] * 4
+    assert [r["F2_weld_mean"] for r in again] == [r["F2_weld_mean"] for r in first]
     assert len(_log_rows(tmp_path)) == 8
 
 
@@ -167,7 +165,13 @@ def test_damaged_log_lines_are_skipped_with_a_warning_and_the_points_rerun(tmp_p
     lines = (tmp_path / POINTS_FILE).read_text().splitlines()
     damaged = [lines[0], "", "[1, 2]", "null", '{"no": "key"}', lines[1], "\x00\x00\x00",
                lines[2][: len(lines[2]) // 2]]          # torn by a kill, without its newline
-    (tmp_path / POINTS_FILE).write_text("\n".join(damaged))
+    # the damage done as the sweep's own writes (a crash, a kill), in a folder of its own: a
+    # record the user edited is the user's, and refused
+    tmp_path = tmp_path / "damaged"
+    tmp_path.mkdir()
+    claim(tmp_path, [POINTS_FILE])
+    with Record(tmp_path / POINTS_FILE) as record:
+        record.write("\n".join(damaged))
     capsys.readouterr()
     rows = run_sweep(_scenario(), points, tmp_path, workers=2, progress=False)
     err = capsys.readouterr().err
@@ -188,14 +192,21 @@ def _table_of_fresh_run(folder, points):
 
 
 def test_a_point_that_failed_is_tried_again_on_a_rerun(tmp_path):
-    points = grid_points({"shaft.omega0": [100.0, 250.0]})
-    (tmp_path / "points").write_text("in the way")      # each point's results.csv cannot be written
+    points = grid_points({"linkage.L_AB": [39.0e-3, 29.0e-3]})     # 29 mm cannot be assembled
     rows = run_sweep(_scenario(), points, tmp_path, workers=2, keep_results=True, progress=False)
-    assert [r["status"] for r in rows] == ["failed", "failed"]
-    (tmp_path / "points").unlink()                       # the passing cause is gone
+    assert [r["status"] for r in rows] == ["ok", "failed"]
     rows = run_sweep(_scenario(), points, tmp_path, workers=2, keep_results=True, progress=False)
-    assert [r["status"] for r in rows] == ["ok", "ok"]
-    assert len(list((tmp_path / "points").glob("*/results.csv"))) == 2
+    assert [r["status"] for r in rows] == ["ok", "failed"]
+    # the failed point ran again (a row appended), the finished one did not
+    assert sorted(r["linkage.L_AB"] for r in _log_rows(tmp_path)) == [29.0e-3, 29.0e-3, 39.0e-3]
+    assert len(list((tmp_path / "points").glob("*/results.csv"))) == 1
+    # a file where the points' folder would go: refused before any point runs, left alone
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "points").write_text("in the way")
+    with pytest.raises(OutputError, match="points there is a file where sewfmu would make"):
+        run_sweep(_scenario(), points, other, workers=2, keep_results=True, progress=False)
+    assert sorted(p.name for p in other.iterdir()) == ["points"]
 
 
 def test_a_misspelt_sweep_parameter_is_refused_before_any_point_runs(tmp_path):

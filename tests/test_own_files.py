@@ -42,7 +42,7 @@ def test_the_files_line_names_what_sewfmu_wrote_and_a_rerun_replaces_its_own(tmp
                                         ("sweep.csv", "a,b\n1,2\n")])
 def test_a_sweep_leaves_a_users_record_or_table_alone(tmp_path, name, text):
     (tmp_path / name).write_text(text)
-    with pytest.raises(sewfmu.OutputError, match=f"{name} there is not a sewfmu sweep's"):
+    with pytest.raises(sewfmu.OutputError, match=f"{name} there is not from sewfmu's last run"):
         sewfmu.sweep("punch_drive", grid={"punch.F30": [1.0, 2.0]}, set=SHORT, out=tmp_path)
     assert (tmp_path / name).read_text() == text
 

@@ -59,10 +59,16 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path):
     kept = [json.loads(line) for line in lines[:2]]
     for row in kept:
         row["F2_weld_mean"] = -1.0          # a mark: a recomputed point would lose it
-    # as if interrupted after two points, in the middle of writing the third
-    (tmp_path / POINTS_FILE).write_text("".join(json.dumps(r) + "\n" for r in kept)
-                                        + lines[2][: len(lines[2]) // 2])
-    rows = run_sweep(_scenario(), points, tmp_path, workers=2, progress=False)
+    # as if interrupted after two points, in the middle of writing the third: its record
+    # listed before the first point (as a sweep does), then appended to
+    from sewfmu.scenarios.files.outputs import Record, claim  # as the sweep writes it
+
+    killed = tmp_path / "killed"
+    killed.mkdir()
+    claim(killed, [POINTS_FILE])
+    with Record(killed / POINTS_FILE) as record:
+        record.write("".join(json.dumps(r) + "\n" for r in kept) + lines[2][: len(lines[2]) // 2])
+    rows = run_sweep(_scenario(), points, killed, workers=2, progress=False)
     marked = {r["key"] for r in kept}
     for row in rows:
         assert row["status"] == "ok"

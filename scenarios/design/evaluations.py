@@ -34,6 +34,7 @@ import numpy as np
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.files.outputs import (
+    Record,
     claim,
     drop_torn_line,
     held,
@@ -64,32 +65,23 @@ class Evaluation:
 
 
 @contextlib.contextmanager
-def study_folder(folder: Path | None, records: Sequence[str], outputs: Sequence[str], ours):
+def study_folder(folder: Path | None, records: Sequence[str], outputs: Sequence[str]):
     """A study's output folder, the one rule of files/outputs.py: held from the first check to
     the last file; every name the study will write (`records`, appended run by run, and
     `outputs`, written at its end through outputs.replacing(folder, kept=records)) checked
-    before the first run, a file sewfmu did not write refused in one line (`ours(name)`: a
-    record of sewfmu's from before folders kept a manifest); the records listed in the
-    folder's manifest before they are written. No folder (out=None): nothing to hold."""
+    before the first run, a file sewfmu did not write refused in one line (the manifest's
+    word, never a file's content); the records listed in the folder's manifest before they
+    are written. No folder (out=None): nothing to hold."""
     if folder is None:
         yield
         return
     folder = Path(folder)
     with held(folder):
+        refuse_theirs(folder, [*records, *outputs])
+        folder.mkdir(parents=True, exist_ok=True)
         remove_debris(folder)
-        refuse_theirs(folder, [*records, *outputs], ours)
         claim(folder, records)
         yield
-
-
-def is_a_log(path: Path) -> bool:
-    """evaluations.csv as a study writes it: its header's first and last columns."""
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            header = f.readline().rstrip("\r\n")
-    except OSError:
-        return False
-    return header.startswith("index,") and header.endswith(",error,key")
 
 
 def progress_bar(enabled: bool, what: str, total: int | None):
@@ -235,11 +227,11 @@ class EvaluationLog:
         self._folder = contextlib.ExitStack()      # the folder is this study's while it runs
         self._folder.enter_context(held(path.parent))
         try:
-            if path.exists():
+            if path.exists() and path.stat().st_size:    # claimed empty: a new record
                 drop_torn_line(path)
                 self._read()
             fresh = not path.exists() or path.stat().st_size == 0
-            self.file = open(path, "a", newline="", encoding="utf-8")
+            self.file = Record(path)
         except BaseException:
             self._folder.close()
             raise
@@ -253,6 +245,7 @@ class EvaluationLog:
             if header != self.columns:
                 # another study's record (other parameters or figures): kept beside, not mixed
                 aside = set_aside(self.path)
+                claim(self.path.parent, [self.path.name])    # the new record, listed
                 _warn(f"{self.path} records other parameters or figures; moved to {aside.name}, "
                       f"and this study starts a new record")
                 return
@@ -286,7 +279,6 @@ class EvaluationLog:
         buffer = io.StringIO()
         csv.writer(buffer).writerow(cells)
         self.file.write(buffer.getvalue())
-        self.file.flush()
 
     def append(self, e: Evaluation) -> int:
         index = self.count

@@ -30,8 +30,8 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.design.evaluations import one_line, progress_bar, study_folder
-from sewfmu.scenarios.design.fit_record import RECORD_FILE, FitRecord, is_a_record
-from sewfmu.scenarios.design.space import Variable, evaluation_budget
+from sewfmu.scenarios.design.fit_record import RECORD_FILE, FitRecord
+from sewfmu.scenarios.design.space import Variable, evaluation_budget, seconds_per_run_over
 from sewfmu.scenarios.files.outputs import replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
@@ -282,11 +282,11 @@ def fit(scenario: Scenario, fmu_paths: dict, free: list[Variable], data: Data,
     # least_squares' max_nfev leaves out the Jacobians' runs: n more per evaluation at most,
     # and the first guess and the optimum's series for the plot besides
     most = budget * (len(free) + 1) + 2
-    what, per_run = f"fit {scenario.name}", runs_budget.seconds_per_run(scenario)
+    what, per_run = f"fit {scenario.name}", seconds_per_run_over(scenario, free)
     runs_budget.check(most, what, runs_budget.max_runs(max_runs),
                       f"--max-evaluations {budget} × ({len(free)} free + 1)", per_run)
     outputs = ["fit.json", *(["fit.png"] if plot else [])]
-    with study_folder(out, [RECORD_FILE], outputs, lambda name: is_a_record(Path(out) / name)):
+    with study_folder(out, [RECORD_FILE], outputs):
         runs_budget.announce(what, most, per_run, shown=progress, most=True)
         return _fit(scenario, fmu_paths, free, data, out, plot, budget, progress)
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.files.outputs import drop_torn_line, held, set_aside
+from sewfmu.scenarios.files.outputs import Record, claim, drop_torn_line, held, set_aside
 from sewfmu.scenarios.runs.sweep import Point, settings_of
 
 RECORD_FILE = "fit_evaluations.jsonl"
@@ -43,7 +43,7 @@ class FitRecord:
                 drop_torn_line(self.path)              # a line torn by a kill
             self._read()
             fresh = not self.path.exists() or self.path.stat().st_size == 0
-            self.file = open(self.path, "a", encoding="utf-8")
+            self.file = Record(self.path)
             if fresh:
                 self._write(self.header)
         except BaseException:
@@ -61,6 +61,7 @@ class FitRecord:
         if not lines or _json(lines[0]) != self.header:
             if lines:
                 aside = set_aside(self.path)
+                claim(self.path.parent, [self.path.name])    # the new record, listed
                 print(f"sewfmu: warning: {self.path} records another fit (other parameters, "
                       f"columns or data); moved to {aside.name}, and this fit starts a new "
                       f"record", file=sys.stderr)
@@ -85,21 +86,10 @@ class FitRecord:
 
     def _write(self, entry: dict) -> None:
         self.file.write(json.dumps(entry) + "\n")
-        self.file.flush()
 
     def close(self) -> None:
         self.file.close()
         self._folder.close()
-
-
-def is_a_record(path: Path) -> bool:
-    """A fit's record, by its first line (folders from before the manifest)."""
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            header = _json(f.readline())
-    except OSError:
-        return False
-    return isinstance(header, dict) and header.get("record") == "sewfmu fit"
 
 
 def _json(line: str):

@@ -38,7 +38,6 @@ from sewfmu.scenarios.design.evaluations import (
     OK,
     Evaluation,
     Evaluator,
-    is_a_log,
     progress_bar,
     study_folder,
 )
@@ -49,6 +48,7 @@ from sewfmu.scenarios.design.space import (
     Variable,
     evaluation_budget,
     figures_of_scenario,
+    seconds_per_run_over,
 )
 from sewfmu.scenarios.files.outputs import replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
@@ -173,11 +173,11 @@ def optimize(scenario: Scenario, fmu_paths: dict, variables: list[Variable], goa
     workers = worker_count(workers, (os.cpu_count() or 1) if method == "global" else 1)
     budget = evaluation_budget(max_evaluations, DEFAULT_EVALUATIONS[method])
     parallel = workers if method == "global" else 1
-    what, per_run = f"optimize {scenario.name}", runs_budget.seconds_per_run(scenario)
+    what, per_run = f"optimize {scenario.name}", seconds_per_run_over(scenario, variables)
     runs_budget.check(budget, what, runs_budget.max_runs(max_runs),
                       f"--max-evaluations {budget}", per_run, parallel)
     outputs = ["optimize.json", *(["convergence.png"] if plot else [])]
-    with study_folder(out, [LOG_FILE], outputs, lambda name: is_a_log(Path(out) / name)):
+    with study_folder(out, [LOG_FILE], outputs):
         runs_budget.announce(what, budget, per_run, parallel, shown=progress, most=True)
         return _optimize(scenario, fmu_paths, variables, goal, constraints, method, workers,
                          out, plot, budget, progress)

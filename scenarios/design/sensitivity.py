@@ -29,7 +29,7 @@ from sewfmu.scenarios.files.outputs import write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, plain
 from sewfmu.scenarios.runs import budget as runs_budget
-from sewfmu.scenarios.runs.sweep import Point, run_sweep
+from sewfmu.scenarios.runs.sweep import Point, run_sweep, seconds_of_points
 
 METHODS = ("sobol", "morris")
 DEFAULT_SAMPLES = {"sobol": 64, "morris": 16}
@@ -103,12 +103,13 @@ def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str
     runs_budget.check(samples * group, what, runs_budget.max_runs(max_runs),
                       f"--samples {samples} × {group} runs a {_GROUP[method]}", per_run,
                       parallel)
-    runs_budget.announce(what, samples * group, per_run, parallel, shown=progress)
     names = [v.name for v in variables]
     problem = {"num_vars": len(variables), "names": names,
                "bounds": [[v.lo, v.hi] for v in variables]}
     X = sample(method, problem, samples)
     points = [Point(i, tuple(zip(names, map(float, row)))) for i, row in enumerate(X)]
+    # each sample's own run (a varied speed changes its length), said before the first
+    per_run = runs_budget.mean_seconds(seconds_of_points(scenario, points))
     made: dict[str, Any] = {}
     pictures = [f"sensitivity_{_file_name(f)}.png" for f in figures]
 
@@ -134,7 +135,9 @@ def sensitivity(scenario: Scenario, variables: list[Variable], figures: list[str
         folder = Path(out) if out is not None else Path(scratch)
         run_sweep(scenario, points, folder, workers=workers, progress=progress,
                   outputs=["sensitivity.json", *pictures] if out is not None else [],
-                  finish=analysis)
+                  finish=analysis,
+                  announce=lambda: runs_budget.announce(what, samples * group, per_run,
+                                                        parallel, shown=progress))
     if "error" in made:
         raise made["error"]
     return made["result"]

@@ -9,6 +9,7 @@ their values in any unit that fits the figure's.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from dataclasses import dataclass
@@ -31,6 +32,8 @@ from sewfmu.scenarios.format.quantities import in_declared_unit
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import check_units_agree, range_in_text
 from sewfmu.scenarios.format.values import ScenarioError, plain, short
+from sewfmu.scenarios.runs.budget import mean_seconds
+from sewfmu.scenarios.runs.sweep import Point, seconds_of_points
 
 _CONSTRAINT = re.compile(r"^\s*([A-Za-z_]\w*)\s*(<=|>=)\s*(\S.*?)\s*$")
 _TARGET = re.compile(r"^\s*([A-Za-z_]\w*)\s*=\s*(\S.*?)\s*$")
@@ -92,16 +95,8 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
         if not lo < hi:
             raise ScenarioError(f"{where}: the lower bound {lo:g} {unit} is not below the upper "
                                 f"bound {hi:g} {unit}")
-        low, high = declared_bound(var.min), declared_bound(var.max)
-        for which, value in (("lower", lo), ("upper", hi)):
-            if (low is not None and value < low) or (high is not None and value > high):
-                raise ScenarioError(
-                    f"{where}: the {which} bound {value:g} {unit} lies outside the range "
-                    f"[{'-inf' if low is None else f'{low:g}'}, "
-                    f"{'inf' if high is None else f'{high:g}'}] {unit} that {inst} "
-                    f"({md.modelName}) declares for {key}")
-        _accepted_by_the_model(scenario, inst, key, (("lower", lo), ("upper", hi)), where,
-                               unit)
+        _within_the_range(scenario, inst, key, var, (("lower", lo), ("upper", hi)), where,
+                          unit, md.modelName)
         given = scenario.instances[inst].parameters.get(key, var.start)
         try:
             start = float(given)
@@ -112,23 +107,49 @@ def variables(scenario: Scenario, ranges: Mapping[str, Any], descriptions: Mappi
     return out
 
 
-def _accepted_by_the_model(scenario: Scenario, inst: str, key: str, bounds, where: str,
-                           unit: str) -> None:
-    """Each bound as a run checks the value (runs/checks.py): for sewfmu's own FMUs also the
-    sign the model allows, which the declared range cannot say (omega0 > 0 within the declared
-    [0, 2000] rad/s): a range is refused before any run, not point by point as it runs."""
+def seconds_per_run_over(scenario: Scenario, variables: Sequence[Variable]) -> float | None:
+    """About how long one run takes over the variables' ranges (runs/budget.py): the mean of
+    the runs at the corners of their box (a varied speed changes a run's length), its middle
+    beyond 8 variables (256 corners)."""
+    names = [v.name for v in variables]
+    corners = list(itertools.product(*((v.lo, v.hi) for v in variables))) if len(variables) <= 8 \
+        else [tuple(0.5 * (v.lo + v.hi) for v in variables)]
+    return mean_seconds(seconds_of_points(scenario, [Point(i, tuple(zip(names, c)))
+                                                     for i, c in enumerate(corners)]))
+
+
+def _within_the_range(scenario: Scenario, inst: str, key: str, var, bounds, where: str,
+                      unit: str, model: str) -> None:
+    """Each bound within the range the FMU declares and, for sewfmu's own FMUs, as a run
+    checks the value (runs/checks.py: also the sign the model allows, which the declared
+    minimum cannot say: omega0 in (0, 2000] rad/s): a range is refused before any run, in one
+    line that shows the range as declared, its brackets open or closed, and the bound with as
+    many digits as tell it from the range's end (2000.0000000000005, not 2000)."""
+    low, high = declared_bound(var.min), declared_bound(var.max)
     fmu = scenario.instances[inst].fmu
-    if fmu not in FMUS or fmu in scenario.fmu_files:
-        return
-    params = slave_class(fmu).params_class
+    params = slave_class(fmu).params_class if fmu in FMUS and fmu not in scenario.fmu_files \
+        else None
     info = next((i for i in parameter_info(params) if i.name == key), None) if params else None
-    for which, value in bounds if info is not None else ():
-        try:
-            check_value(info, value)
-        except ParameterError:
-            raise ScenarioError(f"{where}: the {which} bound {value:g} {unit} lies outside the "
-                                f"range {range_text(info)} {unit} that {inst} ({fmu}) accepts "
-                                f"for {key}") from None
+    shown = range_text(info) if info is not None else \
+        f"[{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}]"
+    ends = [b for b in (low, high, *(info.bounds if info is not None else ())) if b is not None]
+    for which, value in bounds:
+        outside = (low is not None and value < low) or (high is not None and value > high)
+        if not outside and info is not None:
+            try:
+                check_value(info, value)
+            except ParameterError:
+                outside = True
+        if outside:
+            raise ScenarioError(f"{where}: the {which} bound {_digits(value, ends)} {unit} lies "
+                                f"outside the range {shown} {unit} that {inst} ({model}) "
+                                f"declares for {key}")
+
+
+def _digits(value: float, ends) -> str:
+    """The value as %g, or every digit where %g would show it equal to a range's end."""
+    text = f"{value:g}"
+    return repr(value) if any(value != e and text == f"{e:g}" for e in ends) else text
 
 
 def _bounds(spec: Any, where: str) -> tuple[Any, Any]:

@@ -10,15 +10,20 @@ estimate are said before the first run (`announce`).
 
 The estimate is the runs' communication steps times a cost per FMU and step (STEP_COST,
 measured: punch_drive 43 µs, take-up 45, carriage 30, feed 99 on this project's machine), plus
-a start per run, over the workers: a guide to the order of magnitude, not a promise.
+a start per run, over the workers: a guide to the order of magnitude, not a promise. A sweep
+counts each point's own steps (its step, its length, its shaft's speed: runs/sweep.py
+seconds_of_points); a study scenario, computed rather than co-simulated, costs what its study
+was measured to take (STUDY_SECONDS).
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
 
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.value_lists import grid_values
 from sewfmu.scenarios.format.values import ScenarioError, plain, short
 
 SETTING = "SEWFMU_MAX_RUNS"
@@ -28,6 +33,10 @@ STEP_COST = 50e-6           # seconds per FMU and communication step (module doc
 START_COST = 0.05           # seconds per run: the FMUs instantiated and initialized
 POOL_START = 2.0            # seconds: worker processes started, their FMUs first loaded
 SAID_ALWAYS = 30.0          # an estimate beyond this is said even where no progress is shown
+# seconds one computation of a study scenario takes (`sewfmu run NAME`, one sweep point),
+# measured 2026-11-29 on this project's 2-core machine while other work held it (load 5):
+# the order of magnitude; a study not listed costs the dearest
+STUDY_SECONDS = {"carriage_resonance": 2.2, "feed_ratio": 3.6, "takeup_tolerance": 2.9}
 
 
 
@@ -61,15 +70,22 @@ def max_runs(given=None) -> int:
 
 
 def seconds_per_run(scenario: Scenario) -> float | None:
-    """About how long one run of the scenario takes; None where it is not co-simulated (a
-    study's computation) or its length is not known."""
+    """About how long one run of the scenario takes (a study's computation: STUDY_SECONDS);
+    None where its length is not known."""
     if scenario.study:
-        return None
+        return STUDY_SECONDS.get(scenario.study, max(STUDY_SECONDS.values()))
     try:
         steps = scenario.even_steps()[0]
     except ScenarioError:
         return None
     return START_COST + steps * len(scenario.instances) * STEP_COST
+
+
+def mean_seconds(seconds: list[float | None]) -> float | None:
+    """The mean of runs' estimates (runs * mean: their sum), None where one is not known."""
+    if not seconds or any(s is None for s in seconds):
+        return None
+    return sum(seconds) / len(seconds)
 
 
 def duration(seconds: float) -> str:
@@ -119,6 +135,31 @@ def announce(what: str, runs: int, per_run: float | None, workers: int = 1,
 def cpu_workers(workers: int | None) -> int:
     """The worker processes a sweep uses: those asked for, else one per core."""
     return workers or os.cpu_count() or 1
+
+
+def counted(values, where: str, limit: int, what: str) -> tuple[int, object]:
+    """(how many values a grid gives a parameter, the values): counted without a copy where
+    they say their number; a generator or an iterator taken up to the bound on runs and one
+    more, and refused past it without being listed whole (it may never end)."""
+    if isinstance(values, str):
+        return len(grid_values(values, where)), values      # a text list: as long as its text
+    try:
+        return len(values), values
+    except TypeError:                                       # no len(): an iterator, one value
+        pass
+    try:
+        iterator = None if hasattr(values, "keys") else iter(values)
+    except TypeError:
+        iterator = None
+    if iterator is None:
+        return len(grid_values(values, where)), values      # one value, or refused there
+    taken = list(itertools.islice(iterator, limit + 1))
+    if len(taken) > limit:
+        raise ScenarioError(f"{what}: {where} gives more than {limit:,} values (an iterator, "
+                            f"counted up to the bound); more than the {limit:,} runs a sweep "
+                            f"or study may make: make it smaller, or raise the bound "
+                            f"({RAISE_IT})")
+    return len(taken), taken
 
 
 def product(lengths) -> int:

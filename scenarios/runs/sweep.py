@@ -28,6 +28,7 @@ from pathlib import Path
 from sewfmu.extras import require
 from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.files.outputs import (
+    Placing,
     claim,
     folder_for,
     held,
@@ -40,15 +41,13 @@ from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
 from sewfmu.scenarios.format.values import ScenarioError, label_of
-from sewfmu.scenarios.runs.budget import product, worker_count
+from sewfmu.scenarios.runs.budget import product, seconds_per_run, worker_count
 from sewfmu.scenarios.runs.progress import bar as progress_line
 from sewfmu.scenarios.runs.sweep_record import (
     POINTS_FILE,
     TABLE_FILE,
     finished_points,
-    is_a_sweeps,
     open_log,
-    refuse_files_not_ours,
     warn,
 )
 
@@ -111,6 +110,45 @@ def refuse_fixed_and_varied(fixed, varied, role: str, where: str) -> None:
         raise ScenarioError(f"{both[0]} is both fixed (--set, set=) and {role} ({where}): a "
                             f"parameter is either fixed for every run or {role}; give it in "
                             f"one of the two")
+
+
+LENGTHS = ("experiment.revolutions", "experiment.stop_time")
+
+
+def refuse_lengths_given_twice(scenario: Scenario, fixed, grid) -> None:
+    """refuse_two_lengths for each point a sweep makes: the fixed values (--set, set=) with the
+    swept names (--grid, grid=, the [sweep] table's grid, each of its points)."""
+    table, spec = f"the [sweep] table of {scenario.source}", scenario.sweep or {}
+    given = {str(k): "--set, set=" for k in (fixed or {})}
+    refuse_two_lengths({**given, **{k: table for k in spec.get("grid", {})},
+                        **{k: "--grid, grid=" for k in grid}})
+    for each in spec.get("points", []):
+        refuse_two_lengths({**given, **{k: table for k in each}})
+
+
+def refuse_two_lengths(given: dict[str, str]) -> None:
+    """A run's length is exactly one of experiment.revolutions and experiment.stop_time: both
+    given for one run (`given`: each name set or swept -> where, "--set, set=", "--grid,
+    grid=", a [sweep] table) is refused in one line, since the one given last would silently
+    replace the other."""
+    names = {str(name).strip(): where for name, where in given.items()}
+    if all(length in names for length in LENGTHS):
+        (a, b) = LENGTHS
+        raise ScenarioError(f"{a} ({names[a]}) and {b} ({names[b]}) are both given: a run "
+                            f"takes exactly one of revolutions and stop_time, and one would be "
+                            f"silently ignored; give one of the two")
+
+
+def seconds_of_points(scenario: Scenario, points: list[Point]) -> list[float | None]:
+    """About how long each point's run takes (runs/budget.py), with its own values: a point
+    that changes the step, the length or the shaft's speed changes its number of steps."""
+    out = []
+    for point in points:
+        sc = scenario.copy()
+        for target, value in point.values:
+            sc.set_value(target, value)
+        out.append(seconds_per_run(sc))
+    return out
 
 
 def count_points(scenario: Scenario, lengths: dict[str, int]) -> tuple[int, str]:
@@ -179,8 +217,15 @@ def _as_used(scenario: Scenario, target: str, given):
 WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master"]
 
 
+# a row's field (never logged) naming the results.csv a worker wrote for the sweep to place
+PENDING = "_results_written"
+
+
 def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | None = None) -> dict:
-    """One co-simulation (in a worker): its key figures, or the error that stopped it."""
+    """One co-simulation (in a worker): its key figures, or the error that stopped it. With
+    results_dir (the output folder), its results.csv is written there under a temporary name
+    (PENDING in the row): the sweep's process checks and moves it to the point's folder
+    (outputs.Placing), so that no worker writes over a file or through a link."""
     from sewfmu.scenarios.mechanisms.base import figures_of  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import write_csv  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.runner import simulate, summarize  # loaded on first use (start-up time)
@@ -196,11 +241,14 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
             return {**row, "status": "ok", **figures_of(figures)}
         result = simulate(sc)
         figures = summarize(result)
-        if results_dir:
-            write_csv(result, folder_for(Path(results_dir), point.label) / "results.csv")
+        pending = Path(results_dir) / f".point-{key}.results.csv.sewfmu-{os.getpid()}.tmp" \
+            if results_dir else None
+        if pending is not None:
+            write_csv(result, pending)
     except Exception as err:                     # recorded, and the sweep goes on
         return failed_row(row, err)
-    return {**row, "status": "ok", "stop_time": figures["stop_time"], **figures_of(figures)}
+    return {**row, "status": "ok", "stop_time": figures["stop_time"], **figures_of(figures),
+            **({PENDING: str(pending)} if pending is not None else {})}
 
 
 def run_points(scenario: Scenario, points: list[Point], keys: list[str],
@@ -213,23 +261,14 @@ def failed_row(row: dict, err: Exception) -> dict:
     return {**row, "status": "failed", "error": " ".join(str(err).split())}
 
 
-def _cost(scenario: Scenario, point: Point) -> float:
-    """Expected work of a point: its number of communication steps."""
-
-    sc = scenario.copy()
-    for target, value in point.values:
-        sc.set_value(target, value)
-    try:
-        return sc.end_time() / sc.step
-    except ScenarioError:
-        return 0.0
-
-
 def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: int | None = None,
               scheduler: str | None = None, keep_results: bool = False,
-              progress: bool = True, on_point=None, outputs=(), finish=None) -> list[dict]:
+              progress: bool = True, on_point=None, outputs=(), finish=None,
+              announce=None) -> list[dict]:
     """Run every point not yet done in out_dir; return all rows, in point order.
-    `on_point(row)`, if given, hears of each row as it is logged. The folder's files follow
+    `on_point(row)`, if given, hears of each row as it is logged; `announce()` is called once
+    the folder is checked, before the first run (the count and the estimate: a refused folder
+    is the command's one line). The folder's files follow
     files/outputs.py's one rule: every file the sweep will write (its record, its table, each
     point's results, and `outputs`, the names `finish(staging, rows)` writes at the end: the
     pictures, a study's files) is checked before the first point runs, and a file of one of
@@ -245,36 +284,43 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
         for target, value in point.values:
             probe.set_value(target, value, origin=f"{scenario.source}: sweep")
         check_values(probe, paths)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    results = [f"points/{folder_for(Path('.'), p.label).name}/results.csv"
-               for p in points] if keep_results else []
+    results = {p.index: f"points/{folder_for(Path('.'), p.label).name}/results.csv"
+               for p in points} if keep_results else {}
     with held(out_dir):         # its record is this sweep's alone while it runs
+        # every file the sweep will write, checked before anything is written: the check
+        # its files pass again as they take their places (outputs.replacing, Placing)
+        refuse_theirs(out_dir, [POINTS_FILE, TABLE_FILE, *results.values(), *outputs])
+        if announce is not None:
+            announce()
+        out_dir.mkdir(parents=True, exist_ok=True)
         remove_debris(out_dir, recursive=True)
         settings = settings_of(scenario, paths)
         keys = {p.index: p.identity(settings) for p in points}
-        refuse_files_not_ours(out_dir)
-        refuse_theirs(out_dir, [POINTS_FILE, TABLE_FILE, *results, *outputs],
-                      lambda name: is_a_sweeps(out_dir, name))
-        claim(out_dir, [POINTS_FILE, *results])
+        claim(out_dir, [POINTS_FILE])
         done = finished_points(out_dir)
         # longest first: the last points to finish are then short ones, and the workers end together
-        todo = sorted((p for p in points if keys[p.index] not in done),
-                      key=lambda p: -_cost(scenario, p))
-        results_dir = str(out_dir / "points") if keep_results else None
+        todo = [p for p in points if keys[p.index] not in done]
+        cost = dict(zip((p.index for p in todo), seconds_of_points(scenario, todo)))
+        todo.sort(key=lambda p: -(cost[p.index] or 0.0))
+        placing = Placing(out_dir) if keep_results else None
+        index_of = {keys[p.index]: p.index for p in points}
         rows = {keys[p.index]: done[keys[p.index]] for p in points if keys[p.index] in done}
         bar = progress_line(len(points), f"sweep {scenario.name}", "point", initial=len(rows),
                             enabled=progress)
         with open_log(out_dir / POINTS_FILE) as log:
-            for row in _execute(scenario, todo, keys, results_dir, workers, scheduler):
-                log.write((json.dumps(row) + "\n").encode("utf-8"))
-                log.flush()
+            for row in _execute(scenario, todo, keys, str(out_dir) if keep_results else None,
+                                workers, scheduler):
+                pending = row.pop(PENDING, None)
+                if pending is not None:          # listed before its point is: never unlisted
+                    placing.place(Path(pending), results[index_of[row["key"]]])
+                log.write(json.dumps(row) + "\n")
                 rows[row["key"]] = row
                 bar.update(1)
                 if on_point is not None:
                     on_point(dict(row))
         bar.close()
         ordered = [{**rows[keys[p.index]], "index": p.index} for p in points]
-        with replacing(out_dir, kept=[POINTS_FILE, *results]) as staging:
+        with replacing(out_dir, kept=[POINTS_FILE, *results.values()]) as staging:
             _write_table(ordered, [name for name, _ in points[0].values], staging / TABLE_FILE)
             if finish is not None:
                 finish(staging, ordered)

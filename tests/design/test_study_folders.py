@@ -100,7 +100,9 @@ def test_the_api_refuses_as_the_command_line_does(call, tmp_path, no_runs):
 
 
 def _manifest(folder) -> set[str]:
-    return set((folder / MANIFEST).read_text().split())
+    from sewfmu.scenarios.files.outputs import written_by_last_run  # the manifest, as read
+
+    return set(written_by_last_run(folder))
 
 
 def test_a_second_study_replaces_what_the_first_wrote_and_nothing_else(tmp_path):

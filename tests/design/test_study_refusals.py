@@ -77,6 +77,7 @@ def test_a_study_over_the_bound_is_refused_before_any_run(case, capsys, tmp_path
 
 def test_the_bound_is_raised_by_the_option_the_argument_or_the_environment(
         capsys, tmp_path, monkeypatch, no_runs):
+    monkeypatch.chdir(tmp_path)         # its default folder, results/..., a new one
     argv = OVERSIZE["local"][0]
     # raised: the same study goes on to its first run (here the test's stand-in, which fails),
     # saying first what it will take, --quiet or not, since that is long

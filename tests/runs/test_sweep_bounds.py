@@ -137,7 +137,9 @@ def test_a_second_sweep_replaces_what_the_first_wrote_and_nothing_else(tmp_path)
     (tmp_path / "notes.txt").write_bytes(b"mine\n")
     grid = {"punch.F30": [1.0, 2.0]}
     sewfmu.sweep("punch_drive", grid=grid, set=SHORT, workers=1, out=tmp_path, plot=True)
-    listed = set((tmp_path / ".sewfmu-outputs").read_text().split())
+    from sewfmu.scenarios.files.outputs import written_by_last_run  # the manifest, as read
+
+    listed = set(written_by_last_run(tmp_path))
     assert listed == {"points.jsonl", "sweep.csv", "punch_drive_sweep.png"}
     sewfmu.sweep("punch_drive", grid=grid, set=SHORT, workers=1, out=tmp_path)   # resumed
     assert sorted(p.name for p in tmp_path.iterdir()) == [".sewfmu-outputs", "notes.txt",
