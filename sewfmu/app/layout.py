@@ -14,10 +14,11 @@ TICK_MS = 250            # the animation's frame time when playing
 FRAME_DEG = 10           # the animation's frames: every 10° of the last revolution
 
 
-def page(choices: list[str], first: tuple) -> html.Div:
-    """The page, the first scenario's values in it (callbacks.values_of_choice), so that it
-    shows them without a round trip."""
-    cells, defaults, description, numeric, _ = first
+def page(choices: list[str], first: dict) -> html.Div:
+    """The page, the first scenario's values in it (callbacks.values_of_choice, by the names of
+    callbacks.VALUES), so that it shows them without a round trip."""
+    cells, defaults, description = first["values"], first["defaults"], first["description"]
+    numeric = first["sweep_choices"]
     return html.Div(className="page", children=[
         dcc.Location(id="url", refresh=False),
         html.Header([html.H1("sewfmu"), html.Span("set a mechanism's values, run, watch it "
