@@ -23,7 +23,7 @@ from typing import Any, Callable, Mapping
 from sewfmu.arguments import callback, flag, one_line, progress_of, whole
 from sewfmu.arguments import folder as _folder
 from sewfmu.errors import Error
-from sewfmu.scenarios.files.outputs import cannot_write, held
+from sewfmu.scenarios.files.outputs import cannot_write, held, refuse_theirs
 from sewfmu.scenarios.format.loader import catalogue as catalogue_files
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
@@ -214,7 +214,10 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     communication steps as they are done (a page's progress bar)."""
     from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.results import write_outputs  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.results import (  # loaded on first use (start-up time)
+        outputs_of,
+        write_outputs,
+    )
     from sewfmu.scenarios.runs.variants import (  # loaded on first use (start-up time)
         run_variants,
         summary_of_runs,
@@ -228,6 +231,8 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
         raise ScenarioError("plot, animate and report are files: give out= a folder for them")
     # the folder is this run's from its first step to its last file (a sweep's is refused)
     with held(Path(out)) if out is not None else contextlib.nullcontext():
+        if out is not None:         # a user's file where it would write: refused before it runs
+            refuse_theirs(Path(out), outputs_of(sc, plot, animate, report))
         if sc.study:
             return _study_run(sc, out, plot, animate, report)
         bar = TerminalProgress(sc.name) if progress is True else None

@@ -21,7 +21,7 @@ from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import MANIFEST, folder_for, replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.runs.compare import comparison_rows, monolithic_summary
-from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs
+from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs, variants
 
 
 def write_csv(result: RunResult, path: Path) -> None:
@@ -87,6 +87,28 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
             from sewfmu.scenarios.runs.report import run_report  # only with --report
             run_report(staging / "report.html", scenario, runs, pictures, against_monolithic)
     forget_unfinished(out_dir)         # an earlier run's that did not finish: this one did
+
+
+def outputs_of(scenario: Scenario, plot: bool = False, animate: bool = False,
+               report: bool = False) -> list[str]:
+    """Every name a run of the scenario may write into its output folder (write_outputs, or a
+    study's run_study), as asked: checked before the run by the check its files pass at the
+    end (files/outputs.refuse_theirs), so that a user's file there refuses the run before its
+    first step, not after it. A picture whose drawing fails is not written: these are the
+    most a run writes."""
+    if scenario.study:
+        return ["study.json", "summary.json"] + [f"{scenario.name}.png"] * (plot or report) \
+            + ["report.html"] * report
+    moving = (animate or report) and scenario.mechanism is not None and \
+        scenario.mechanism.animated                # animation.can_animate, without matplotlib
+    names = []
+    for label, _ in variants(scenario):
+        where = f"{folder_for(Path('.'), label).name}/" if label else ""
+        names += [f"{where}results.csv", f"{where}summary.json"] + \
+            [f"{where}{scenario.name}.gif"] * moving
+    return names + ["summary.json"] * bool(scenario.compare) \
+        + [f"{scenario.name}.png"] * bool((plot or report) and scenario.analysis) \
+        + ["report.html"] * report
 
 
 UNFINISHED = "interrupted"      # the folder in OUT of the record of a run that did not finish
