@@ -522,7 +522,7 @@ WITHIN_ELSEWHERE = {
     "within 0.2 µm of the exact bouncing": "the held punch against its exact bouncing: "
                                            "tests/components/test_punch_contact.py",
     "within 4 % of its μ*": "Morris's μ* against one-at-a-time runs: "
-                            "tests/test_design_examples.py (20 %)",
+                            "tests/design/test_design_examples.py (20 %)",
 }
 
 FIELD = re.compile(r"\{(fig|within|bound|verdict|wall|stamp) ([^ }]+)(?: ([^ }]+))?\}")

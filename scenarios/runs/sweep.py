@@ -213,7 +213,7 @@ def _as_used(scenario: Scenario, target: str, given):
 
 
 # what the worker processes' fork server imports once, so that no worker imports it again
-# (multiprocessing ignores a name it cannot import: tests/test_sweep.py imports them)
+# (multiprocessing ignores a name it cannot import: tests/runs/test_sweep.py imports them)
 WORKER_PRELOAD = ["sewfmu.scenarios.runs.runner", "sewfmu.scenarios.cosim.master"]
 
 

@@ -15,7 +15,6 @@ import pytest
 import sewfmu
 from sewfmu.cli import main
 
-REPO = Path(__file__).resolve().parent.parent
 SHORT = {"experiment.revolutions": 2}     # the punch's figures settle in its first revolution
 
 

@@ -7,14 +7,12 @@ feed lever length for a wanted path width of the feed dog, the stitch rate with 
 residual vibration of the carriage, the ranking of the punch's parameters for the welding
 force."""
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import sewfmu
 
-REPO = Path(__file__).resolve().parent.parent
 RPM = math.pi / 30.0                        # rad/s per rpm
 
 

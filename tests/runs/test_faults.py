@@ -25,10 +25,10 @@ from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError
 from sewfmu.scenarios.runs.sweep import POINTS_FILE, grid_points, points_of, run_sweep, settings_of
 from sewfmu.scenarios.runs.workers import WorkerDied, run_tasks
+from tests.paths import REPO
 
 pytestmark = [pytest.mark.slow]
 
-REPO = Path(__file__).resolve().parent.parent
 PUNCH = (REPO / "scenarios" / "catalogue" / "punch_drive.toml").read_text()
 GRID = {"shaft.omega0": [100.0, 250.0], "punch.F30": [0.0, 8.0]}
 
