@@ -207,6 +207,8 @@ class _Terminal:
 def test_optimize_and_fit_show_their_runs_on_a_terminal(monkeypatch, tmp_path):
     terminal = _Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
+    # a line appears once the work has taken a second (runs/progress.py); these take less
+    monkeypatch.setattr("sewfmu.scenarios.runs.progress.QUIET_FOR", 0.0)
     sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"}, minimize="F2_peak",
                     set=SHORT, max_evaluations=3, progress=True)
     assert "optimize punch_drive" in terminal.text and "/3 [" in terminal.text
