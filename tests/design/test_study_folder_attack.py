@@ -74,9 +74,12 @@ def test_a_record_that_cannot_be_appended_to_names_itself(tmp_path):
     assert err.value.filename == str(tmp_path / "evaluations.csv")
 
 
-def test_a_bound_past_the_ranges_end_shows_its_digits_and_the_declared_brackets(capsys):
+def test_a_bound_past_the_ranges_end_shows_its_digits_and_the_declared_brackets(capsys,
+                                                                                 monkeypatch,
+                                                                                 tmp_path):
     """19098.593171027446 rpm is 2000.0000000000005 rad/s: it was refused as "the upper bound
     2000 rad/s lies outside the range [0, 2000] rad/s" (omega0's range is (0, 2000])."""
+    monkeypatch.chdir(tmp_path)                # the default output folder lies in the cwd
     given = 19098.593171027446
     assert given * 2 * math.pi / 60 > 2000.0                 # just past the end, in rad/s
     said = repr(given * 2 * math.pi / 60)
