@@ -2,7 +2,7 @@
 processes (a run, a cancel, two at once), the files it serves and those it refuses, the command
 line's refusals, and what the page asks of the public API (a progress callback, a sweep's
 points as they finish, the mechanism's drawing as numbers). The page in a browser:
-tests/test_app_browser.py."""
+tests/app/test_app_browser.py."""
 import socket
 import subprocess
 import sys
