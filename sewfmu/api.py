@@ -20,10 +20,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from sewfmu.arguments import callback, flag, one_line, progress_of, whole
+from sewfmu.arguments import callback, flag, mapping, one_line, progress_of, reading, whole
 from sewfmu.arguments import folder as _folder
 from sewfmu.errors import Error
 from sewfmu.scenarios.files.outputs import cannot_write, held, refuse_theirs
+from sewfmu.scenarios.format.built import checked_copy
 from sewfmu.scenarios.format.loader import catalogue as catalogue_files
 from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
@@ -52,8 +53,10 @@ def read_value(text: str) -> Any:
 def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) -> Scenario:
     """A scenario (catalogue name, TOML or SSP path) with the `set` overrides applied; a Scenario
     given is copied, never changed."""
+    set = mapping(set, "set", "'instance.parameter': value", scalars=True)    # read once, here
     if isinstance(scenario, Scenario):
-        loaded = scenario.copy()
+        # built in Python: every field checked as a file's are (format/built.py)
+        loaded = checked_copy(scenario)
         for inst in loaded.instances.values():       # a value with a unit, a numpy number:
             for key, value in list(inst.parameters.items()):     # as --set would take it
                 if not isinstance(value, (bool, int, float)):
@@ -63,9 +66,6 @@ def load(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None) 
     else:
         raise ScenarioError(f"a scenario is a catalogue name, a path or a Scenario, got "
                             f"{type(scenario).__name__}")
-    if set is not None and not isinstance(set, Mapping):
-        raise ScenarioError(f"set: expected a dict of 'instance.parameter': value, got "
-                            f"{type(set).__name__}")
     if set and {"experiment.revolutions", "experiment.stop_time"} <= {str(k).strip() for k in set}:
         from sewfmu.scenarios.runs.sweep import refuse_two_lengths  # only when both are given
 
@@ -368,11 +368,9 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
         sweep_pictures,
     )
 
+    set = mapping(set, "set", "'instance.parameter': value", scalars=True)    # read once, here
     sc = load(scenario, set)
-    if grid is not None and not isinstance(grid, Mapping):
-        raise ScenarioError(f"grid: expected a dict of 'instance.parameter': [values], got "
-                            f"{type(grid).__name__}")
-    grid = {str(k): v for k, v in (grid or {}).items()}
+    grid = mapping(grid, "grid", "'instance.parameter': [values]") or {}
     spec = sc.sweep or {}
     refuse_fixed_and_varied(set, grid, "swept", "--grid, grid=")
     refuse_fixed_and_varied(set, [*spec.get("grid", {}), *(k for p in spec.get("points", [])
@@ -390,12 +388,14 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     progress, on_point = flag(progress, "progress"), callback(on_point, "on_point")
     # counted from the axes' lengths before a list or a point is made (a generator: to the bound)
     limit, what = budget.max_runs(max_runs), f"sweep {sc.name}"
-    grid = {k: budget.counted(v, f"grid {k}", limit, what) for k, v in grid.items()}
+    with reading("grid"):       # a generator, a __len__ of the caller's: what they raise
+        grid = {k: budget.counted(v, f"grid {k}", limit, what) for k, v in grid.items()}
     count, cause = count_points(sc, {k: n for k, (n, _) in grid.items()})
     per_run = budget.seconds_per_run(sc) if scheduler is None else None
     parallel = budget.cpu_workers(workers)
     budget.check(count, what, limit, cause, per_run, parallel)
-    grid = {k: grid_values(v, f"grid {k}") for k, (_, v) in grid.items()}
+    with reading("grid"):
+        grid = {k: grid_values(v, f"grid {k}") for k, (_, v) in grid.items()}
     points = points_of(sc, grid)
     # each point's own steps (its step, length, speed), said before the first run
     per_run = budget.mean_seconds(seconds_of_points(sc, points)) if scheduler is None else None

@@ -4,12 +4,15 @@ folder, a flag, a progress callback, and what the file system answers. Whatever 
 what comes out is a sewfmu.Error of one line, never Python's TypeError or FileNotFoundError."""
 from __future__ import annotations
 
+import contextlib
 import functools
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Callable
 
+from sewfmu.errors import Error
 from sewfmu.scenarios.files.outputs import OutputError
-from sewfmu.scenarios.format.values import ScenarioError, plain, short
+from sewfmu.scenarios.format.values import ScenarioError, exact, plain, short
 
 
 def folder(value: Any, name: str) -> Path | None:
@@ -92,3 +95,45 @@ def whole(value: Any, name: str, low: int | None = None, high: int | None = None
                 else f" >= {low}" if low is not None else "")
         raise ScenarioError(f"{name}: expected a whole number{span}, got {short(value)}")
     return value
+
+
+@contextlib.contextmanager
+def reading(name: str):
+    """The API reading a caller's object (set=, grid=): whatever that object raises while it is
+    read (a generator that fails, a __len__ of 10**30, a key whose __str__ raises) comes out as
+    one ScenarioError line naming the argument, not as the object's own exception."""
+    try:
+        yield
+    except Error:
+        raise
+    except Exception as err:            # noqa: BLE001 - anything a user's object raises
+        try:
+            said = " ".join(str(err).split())
+        except Exception:               # noqa: BLE001 - an exception whose text raises too
+            said = ""
+        said = f"{said[:200]}..." if len(said) > 200 else said
+        raise ScenarioError(f"{name}: reading it raised {type(err).__name__}"
+                            f"{': ' + said if said else ''}") from None
+
+
+def mapping(value: Any, name: str, expected: str,
+            scalars: bool = False) -> dict[str, Any] | None:
+    """A dict argument (set=, grid=) read once, under `reading`: None, or a plain dict of text
+    keys (a key's own __str__ asked once, here) and the values exact (format/values.exact: a
+    subclass of str or float as the plain value it holds); with `scalars` (set=) each value a
+    number, true or false, or a text."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise ScenarioError(f"{name}: expected a dict of {expected}, got {type(value).__name__}")
+    with reading(name):
+        out = {}
+        for key, item in value.items():
+            key = str.__str__(key) if isinstance(key, str) else str(key)
+            if not isinstance(key, str):
+                raise ScenarioError(f"{name}: a key is no text ({type(key).__name__})")
+            out[key] = exact(item)
+            if scalars and not isinstance(out[key], (bool, int, float, str)):
+                raise ScenarioError(f"{name} {key}: a value is a number, true or false, or a "
+                                    f"text with its unit (\"955 rpm\"), got {short(item)}")
+        return out

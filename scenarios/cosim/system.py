@@ -15,8 +15,9 @@ import numpy as np
 
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.cosim.connection_units import conversion, convert_inputs
-from sewfmu.scenarios.cosim.divergence import bound_text, declared_bound
+from sewfmu.scenarios.cosim.divergence import declared_bound
 from sewfmu.scenarios.cosim.fmi_calls import LogCollector, kind_of
+from sewfmu.scenarios.format.declared_range import out_of_range
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError
 
@@ -127,24 +128,11 @@ def check_parameters(scenario: Scenario, descriptions: dict) -> None:
                                     f"got {value!r}")
             low, high = declared_bound(v.min), declared_bound(v.max)
             if (low is not None and value < low) or (high is not None and value > high):
-                hint = _unit_hint(v.unit, value, low, high) if high is not None and value > high \
-                    else ""
-                raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: parameter {key} = "
-                                    f"{value:.10g} {v.unit or ''} is outside the range "
-                                    f"[{bound_text(low, '-inf')}, {bound_text(high, 'inf')}] "
-                                    f"{inst.name} ({md.modelName}) declares{hint}")
-
-
-def _unit_hint(unit: str | None, value: float, low: float | None, high: float) -> str:
-    """How a value out of range may have been meant: its number in the unit users think in
-    (the first display unit: rpm for rad/s, mm for m), where that is within the range (9550
-    rad/s meant as rpm; not 104720 rad/s, which was 1e6 rpm and is too fast in any unit)."""
-    from sewfmu.components.units import DISPLAY_UNITS  # loaded on first use (start-up time)
-
-    for display, factor in list(DISPLAY_UNITS.get(unit or "", {}).items())[:1]:
-        if (low is None or value / factor >= low) and value / factor <= high:
-            return f" (meant in {display}? give the unit: \"{value:.10g} {display}\")"
-    return ""
+                target = f"{inst.name}.{key}"
+                raise ScenarioError(out_of_range(scenario.origin_of(target), target, value,
+                                                 v.unit, low, high,
+                                                 f"{inst.name} ({md.modelName}) declares",
+                                                 scenario.with_unit(target)))
 
 
 def check_inputs_given(scenario: Scenario, instances: list) -> None:

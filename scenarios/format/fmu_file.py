@@ -18,9 +18,12 @@ import zlib
 from pathlib import Path
 
 from sewfmu.components.parameters import did_you_mean
+from sewfmu.scenarios.format.declared_range import apart
 from sewfmu.scenarios.format.values import ScenarioError
 
 SUFFIX = ".fmu"
+MAX_XML_BYTES = 64 << 20        # a modelDescription.xml sewfmu reads (the largest seen: ~20 MiB)
+MAX_HEAD_BYTES = 1 << 20        # read for the root element's start tag
 _INTEGERS = {"Integer", "Enumeration", "Boolean",
              *(f"{sign}Int{bits}" for sign in ("", "U") for bits in (8, 16, 32, 64))}
 
@@ -54,7 +57,11 @@ def model_description(path: Path, where: str, validate: bool = True):
                 shown = ", ".join(listed[:3]) + (", ..." if len(listed) > 3 else "")
                 raise ScenarioError(f"{name} is not an FMU: it has no modelDescription.xml (it "
                                     f"holds: {shown or 'nothing'})")
-            root, why = _root_tag(archive)
+            size = archive.getinfo("modelDescription.xml").file_size
+            if size > MAX_XML_BYTES:     # parsed whole by fmpy: bounded before any parser
+                raise ScenarioError(f"{name}: its modelDescription.xml is {size / 2**20:,.0f} "
+                                    f"MiB, more than the {MAX_XML_BYTES >> 20} MiB sewfmu reads")
+            root, version, why = _root_tag(archive, name)
     except (zipfile.BadZipFile, EOFError):
         raise ScenarioError(f"{name} is not an FMU: not a zip archive") from None
     except OSError as err:
@@ -64,6 +71,11 @@ def model_description(path: Path, where: str, validate: bool = True):
     if root != "fmiModelDescription":
         raise ScenarioError(f"{name}: its modelDescription.xml is no FMI model description (its "
                             f"root element is <{root[:40]}>, not <fmiModelDescription>)")
+    if not isinstance(version, str) or not version.startswith(("2.", "3.")):
+        said = ("FMI 1.0" if version in ("1.0", "1") else
+                f"its fmiVersion {version[:20]!r}" if isinstance(version, str) else
+                "a modelDescription without fmiVersion")
+        raise ScenarioError(f"{name}: {said} is not supported (FMI 2.0 and 3.0 are)")
     try:
         return read_model_description(str(path), validate=validate)
     except Exception as err:            # noqa: BLE001 - any unreadable FMU is one message
@@ -72,19 +84,37 @@ def model_description(path: Path, where: str, validate: bool = True):
                             f"{said[:300]}{'...' if len(said) > 300 else ''})") from None
 
 
-def _root_tag(archive: zipfile.ZipFile) -> tuple[str | None, str]:
-    """The name of modelDescription.xml's root element (no namespace), or None and why it is no
-    XML; only the bytes up to the root element are read."""
+def _root_tag(archive: zipfile.ZipFile, name: str) -> tuple[str | None, str | None, str]:
+    """The name of modelDescription.xml's root element (no namespace) and its fmiVersion, or
+    None and why it is no XML; only the bytes up to the root element are read, at most
+    MAX_HEAD_BYTES of them (expat 2.5 takes quadratic time over one long start tag fed in
+    pieces: a root with a 60 MiB attribute was minutes)."""
+    parser = ET.XMLPullParser(events=("start",))
     try:
         with archive.open("modelDescription.xml") as xml:
-            for _, element in ET.iterparse(xml, events=("start",)):
-                return element.tag.rpartition("}")[2], ""
+            read = 0
+            while read < MAX_HEAD_BYTES:
+                chunk = xml.read(1 << 16)
+                if not chunk:
+                    parser.close()
+                    break
+                read += len(chunk)
+                parser.feed(chunk)
+                for _, element in parser.read_events():
+                    return element.tag.rpartition("}")[2], element.get("fmiVersion"), ""
+            else:
+                raise ScenarioError(f"{name}: the root element of its "
+                                    f"modelDescription.xml does not end within its first "
+                                    f"{MAX_HEAD_BYTES >> 20} MiB (an attribute of megabytes): "
+                                    f"no FMI model description")
     except ET.ParseError as err:
-        return None, " ".join(str(err).split())
+        return None, None, " ".join(str(err).split())
+    except ScenarioError:               # a ValueError too: not a damaged member
+        raise
     except (zipfile.BadZipFile, EOFError, RuntimeError, zlib.error, NotImplementedError,
             UnicodeError, ValueError) as err:
-        return None, f"a damaged member: {' '.join(str(err).split())[:200]}"
-    return None, "no element"
+        return None, None, f"a damaged member: {' '.join(str(err).split())[:200]}"
+    return None, None, "no element"
 
 
 def read_fmu(path: Path, where: str):
@@ -119,16 +149,27 @@ def check_parameter(md, key: str, value, where: str) -> None:
         raise ScenarioError(f"{where}: {key} is a {v.type}; a scenario gives numbers")
     if v.type in _INTEGERS and float(value) != math.floor(float(value)):
         raise ScenarioError(f"{where}: {key} is a {v.type}: a whole number, got {value!r}")
-    declared = getattr(v, "declaredType", None)
-    for bound, limit in (("min", lambda x, b: x < b), ("max", lambda x, b: x > b)):
-        text = getattr(v, bound, None) or (getattr(declared, bound, None) if declared else None)
-        try:
-            number = float(text) if text is not None else None
-        except ValueError:              # a bound that is no number says nothing
-            number = None
+    for bound, number, limit in zip(("min", "max"), declared_bounds(v),
+                                    (lambda x, b: x < b, lambda x, b: x > b)):
         if number is not None and limit(float(value), number):
-            raise ScenarioError(f"{where}: {key} = {value!r} {unit_of(v)} is outside the range "
-                                f"{md.modelName} declares ({bound} {number:g})")
+            shown, limit_text = apart(float(value), number)
+            raise ScenarioError(f"{where}: {key} = {shown} {unit_of(v)} is outside the range "
+                                f"{md.modelName} declares ({bound} {limit_text})")
+
+
+def declared_bounds(variable) -> tuple[float | None, float | None]:
+    """A variable's declared (min, max), its own or its declared type's; None where it
+    declares none (or a bound that is no number, which says nothing)."""
+    declared = getattr(variable, "declaredType", None)
+    out = []
+    for bound in ("min", "max"):
+        text = getattr(variable, bound, None) or \
+            (getattr(declared, bound, None) if declared else None)
+        try:
+            out.append(float(text) if text is not None else None)
+        except (TypeError, ValueError):
+            out.append(None)
+    return out[0], out[1]
 
 
 def check_binary(path: Path, md, where: str = "") -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.scenarios.format.parse import from_dict
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError, short
 
 
 def _catalogue_folder() -> Path:
@@ -25,11 +25,15 @@ def catalogue() -> dict[str, Path]:
 
 def resolve(name_or_path: str) -> Path:
     path = Path(name_or_path)
+    folder = ScenarioError(f"{path_text(path)} is a folder, not a scenario: give a .toml file "
+                           f"(or an .ssp) in it")
+    if path.suffix.lower() in (".toml", ".ssp", ".ssd") and _is_folder(path):
+        raise folder
     if path.suffix.lower() in (".ssp", ".ssd"):
         return path
     if path.suffix == ".toml":
         if not path.is_file():
-            raise ScenarioError(f"scenario file {path} does not exist")
+            raise ScenarioError(f"scenario file {path_text(path)} does not exist")
         return path
     # a catalogue name: its file looked up directly (listing the catalogue costs 0.6 ms a run)
     if name_or_path == path.name and not name_or_path.startswith("."):
@@ -40,11 +44,26 @@ def resolve(name_or_path: str) -> Path:
         except OSError:                  # a name no file can have: not in the catalogue
             pass
     known = catalogue()
+    if name_or_path not in known and _is_folder(path):      # not a catalogue name: a folder
+        raise folder
     if name_or_path not in known:
-        raise ScenarioError(f"unknown scenario {name_or_path!r}"
+        raise ScenarioError(f"unknown scenario {short(name_or_path)}"
                             f"{did_you_mean(name_or_path, known)} (catalogue: "
                             f"{', '.join(sorted(known))}; or give a path to a .toml file)")
     return known[name_or_path]
+
+
+def _is_folder(path: Path) -> bool:
+    try:
+        return path.is_dir()
+    except (OSError, ValueError):       # a name too long, a NUL: no folder
+        return False
+
+
+def path_text(path: Path) -> str:
+    """A path for a message: whole up to 200 characters, else cut, its length said."""
+    text = str(path)
+    return text if len(text) <= 200 else f"{text[:120]}...{text[-40:]} ({len(text):,} characters)"
 
 
 def load(name_or_path: str) -> Scenario:

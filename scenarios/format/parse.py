@@ -11,7 +11,7 @@ from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.fmu_file import check_parameter, fmu_path, is_fmu_file, read_fmu
 from sewfmu.scenarios.format.master_settings import MASTER_NAMES
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
-from sewfmu.scenarios.format.value_lists import check_units_agree, grid_values
+from sewfmu.scenarios.format.value_lists import check_units_agree, grid_values, values_in_text
 from sewfmu.scenarios.format.values import (
     ScenarioError,
     check_instance_name,
@@ -145,9 +145,9 @@ def from_dict(data: dict, name: str, source: str) -> Scenario:
     check_one_source(scenario.connections, source)
     check_record(scenario.record, source)
     if scenario.compare is not None:
-        _check_compare(scenario, source)
+        check_compare(scenario, source)
     if scenario.sweep is not None:
-        _check_sweep(scenario.sweep, source)
+        check_sweep(scenario.sweep, source)
     return scenario
 
 
@@ -174,13 +174,17 @@ def check_record(record: Any, source: str) -> None:
         raise ScenarioError(f"{source}: record lists {twice[0]!r} more than once")
 
 
-def _check_compare(scenario: Scenario, source: str) -> None:
-    """[compare] parameter = "instance.parameter" (or "experiment.key"), values = [distinct]."""
+def check_compare(scenario: Scenario, source: str) -> None:
+    """[compare] parameter = "instance.parameter" (or "experiment.key"), values = [distinct],
+    or values as a text list ("955, 1910 rpm": a unit after the last applies to all)."""
     cmp = scenario.compare
+    if isinstance(cmp, dict) and isinstance(cmp.get("values"), str):
+        cmp["values"] = values_in_text(cmp["values"], f"{source}: compare.values")
     if not isinstance(cmp, dict) or not isinstance(cmp.get("parameter"), str) \
             or not isinstance(cmp.get("values"), list) or not cmp["values"]:
         raise ScenarioError(f"{source}: [compare] needs parameter = \"instance.parameter\" and "
-                            f"a non-empty list values = [...]")
+                            f"a non-empty list values = [...] (or a text list \"955, 1910 "
+                            f"rpm\")")
     unknown = set(cmp) - set(COMPARE_KEYS)
     if unknown:
         raise ScenarioError(f"{source}: unknown key compare.{sorted(unknown)[0]} "
@@ -213,7 +217,7 @@ def _bind_roles(data: dict, instances: dict[str, Instance], source: str) -> dict
         raise ScenarioError(f"{source}: {err}") from None
 
 
-def _check_sweep(sweep: Any, source: str) -> None:
+def check_sweep(sweep: Any, source: str) -> None:
     """[sweep] grid = { "instance.parameter" = [values] }, or [[sweep.points]] tables."""
     if not isinstance(sweep, dict) or set(sweep) - set(SWEEP_KEYS):
         raise ScenarioError(f"{source}: [sweep] takes grid = {{ \"instance.parameter\" = [...] }} "

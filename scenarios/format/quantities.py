@@ -6,7 +6,8 @@ comes through here; a bare number never does: it is already in the declared unit
 ranges of values are split by format/value_lists.py, which hands each value here.
 
 The grammar (docs/scenarios.md, "Values with units"): a number as Python and TOML write a
-decimal one, then optionally a unit: pint's names and FMI's spellings ("m/s2", "kg.m2", "N.s/m"),
+decimal one (no leading zeros, no '_' between digits, no 0x, 0o, 0b, no '#' comment after it),
+then optionally a unit: pint's names and FMI's spellings ("m/s2", "kg.m2", "N.s/m"),
 joined by * / . or a space, with whole exponents from -12 to 12, parentheses balanced, at most
 64 characters. Whatever the text, the answer is the number or a UnitError of one line.
 
@@ -37,7 +38,7 @@ NUMBER_AND_REST = re.compile(rf"^\s*({NUMBER})\s*(.*?)\s*$", re.DOTALL)
 # how a unit may begin: a letter, a parenthesis, a degree or per cent sign, or "1/" ("1/min");
 # "1 2 deg" and "2*3 mm" are no values with a unit, though pint's parser would multiply them out
 UNIT_START = re.compile(r"^(?:[^\W\d_]|[(°%]|1\s*/)")
-_NOT_FINITE = re.compile(r"^\s*[-+]?(?:nan|inf|infinity)\b", re.IGNORECASE)
+NOT_FINITE = re.compile(r"^\s*[-+]?(?:nan|inf|infinity)\b", re.IGNORECASE)
 LONGEST_UNIT = 64               # characters: "kg.m2/s2" is 8; pint's parser recurses on more
 LARGEST_EXPONENT = 12           # m**3, s**-2, N.m2; kN**103 is beyond a float
 EXAMPLES = "e.g. N, kN, lbf, mm, in, rpm, rev/s, deg, N/mm, g, ms"
@@ -82,6 +83,28 @@ def _article(kind: str) -> str:
     return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
 
 
+# what Python or TOML would read as a number but the grammar does not: one grammar for --set,
+# the API's set=, a file and the page (docs/scenarios.md), and no comment in a value
+_NOT_DECIMAL = (
+    (re.compile(r"[-+]?0[xXoObB]"), "hexadecimal, octal and binary numbers are not read: "
+                                    "write the number in decimal"),
+    (re.compile(r"[-+]?[\d.]*\d_"), "'_' between digits is not read: write the digits "
+                                     "alone (1000, not 1_000)"),
+    (re.compile(r"[-+]?0\d"), "a number starts with 0 only where it is 0 or 0.something: "
+                              "write it without the leading zeros"),
+    (re.compile(r"[^#]*#"), "'#' starts no comment in a value: give the number and its unit "
+                           "alone (\"100 rpm\")"),
+)
+
+
+def _not_decimal(text: str) -> str | None:
+    """Why a text that begins like a number is none of the grammar's, or None."""
+    for pattern, why in _NOT_DECIMAL:
+        if pattern.match(text):
+            return why
+    return None
+
+
 def split(text: str, target: str = "the value") -> tuple[float, str]:
     """"30 N/mm" -> (30.0, "N/mm"); "0.5" -> (0.5, ""). Raises UnitError, one line, for a text
     that is no finite number with an optional unit."""
@@ -95,13 +118,16 @@ def split(text: str, target: str = "the value") -> tuple[float, str]:
         raise UnitError(f"{target} = {quoted(text)}: empty: give a number, or a number with its "
                         f"unit like \"110 deg\"")
     if match is None:
-        if _NOT_FINITE.match(text):
+        if NOT_FINITE.match(text):
             raise UnitError(f"{target} = {quoted(text)}: not a finite number (NaN and infinity "
                             f"are no values here)")
         hint = ("; one value here: a list (\"100, 200 rpm\") is a sweep's grid"
                 if "," in text else "")
         raise UnitError(f"{target} = {quoted(text)}{hint}: must be a number, or a number with "
                         f"its unit like \"110 deg\"")
+    problem = _not_decimal(" ".join(text.split()))
+    if problem:
+        raise UnitError(f"{target} = {quoted(text)}: {problem}")
     number, rest = float(match.group(1)), match.group(2)
     if rest.startswith(","):
         raise UnitError(f"{target} = {quoted(text)}: one value here: a list (\"100, 200 rpm\") "

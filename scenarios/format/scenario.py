@@ -14,10 +14,22 @@ from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.format.declared_units import parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
-from sewfmu.scenarios.format.fmu_file import model_description
+from sewfmu.scenarios.format.fmu_file import declared_bounds, model_description
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
-from sewfmu.scenarios.format.values import ScenarioError, plain, positive, positive_in, short
+from sewfmu.scenarios.format.values import (
+    DECIMAL,
+    ScenarioError,
+    check_scenario_name,
+    positive,
+    positive_in,
+    real,
+    short,
+)
 from sewfmu.scenarios.mechanisms import Mechanism, RoleError, mechanism
+
+# seconds a shaft revolution may take before a run of revolutions blames the speed rather
+# than the step for its number of steps (2π·1e-6 rad/s: no sewing machine turns so slowly)
+SLOWEST_TURN = 1e6
 
 
 @dataclass(frozen=True)
@@ -71,6 +83,27 @@ class Scenario:
     study: str | None = None
     # the mechanism its analysis names (scenarios/mechanisms), resolved once, here
     mechanism: Mechanism | None = field(default=None, init=False, repr=False, compare=False)
+    # "instance.parameter" or "experiment.key" -> (where its value was given: "--set", "set",
+    # "--grid (grid=)", the file; the text it was given as, where it carried a unit): a refusal
+    # names the option the user typed, and offers no unit to a value given with one
+    given: dict[str, tuple[str, str | None]] = field(default_factory=dict, init=False,
+                                                     repr=False, compare=False)
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        if key == "name":               # it names files and folders: never a path
+            check_scenario_name(value)
+        super().__setattr__(key, value)
+
+    def origin_of(self, target: str) -> str:
+        """Where the value of `target` was given, as a message begins with it: the option
+        ("--set", "set", "--grid (grid=)"), or the scenario's file ("path/x.toml:")."""
+        origin = self.given.get(target, ("", None))[0]
+        return origin if origin and not origin.startswith(self.source) else f"{self.source}:"
+
+    def with_unit(self, target: str) -> str | None:
+        """The text `target`'s value was given as where it carried a unit ("955 rpm"), else
+        None."""
+        return self.given.get(target, ("", None))[1]
 
     def __post_init__(self):
         if self.analysis is None:
@@ -129,8 +162,32 @@ class Scenario:
         try:
             params = with_values(ShaftParams(), **inst.parameters)
         except ParameterError as err:
-            raise ScenarioError(f"{self.source}: {self.shaft}: {err}") from None
-        return MainShaft(params).time_of_angle(2 * math.pi * self.revolutions)
+            raise ScenarioError(self._refused(self.shaft, ShaftParams, err)) from None
+        end = MainShaft(params).time_of_angle(2 * math.pi * self.revolutions)
+        if not math.isfinite(end):          # "5e-324 rad/s": no end a float can hold
+            speed = f"{self.shaft}.omega0"
+            raise ScenarioError(f"{self.origin_of(speed)} {speed} = {params.omega0!r} rad/s is "
+                                f"so slow that {_turns(self.revolutions)} would never end "
+                                f"(no time a float holds); give the shaft a speed")
+        return end
+
+    def _refused(self, inst: str, params_class, err) -> str:
+        """A model's refusal of a parameter (components/parameters.py), worded as the run's
+        check words it: where the value was given, and a value out of the declared range with
+        the digits that set it apart from the bound and no unit offered for one given."""
+        from sewfmu.components.parameters import parameter_info  # loaded with the model
+        from sewfmu.scenarios.format.declared_range import out_of_range  # only for a refusal
+
+        info = {i.name: i for i in parameter_info(params_class)}.get(err.name)
+        value = self.instances[inst].parameters.get(err.name)
+        target = f"{inst}.{err.name}"
+        if info is not None and isinstance(value, (int, float)) and math.isfinite(value):
+            low, high = info.bounds
+            if (low is not None and value < low) or (high is not None and value > high):
+                return out_of_range(self.origin_of(target), target, value, info.unit, low, high,
+                                    f"{inst} ({self.instances[inst].fmu}) declares",
+                                    self.with_unit(target))
+        return f"{self.origin_of(target)} {inst}: {err}"
 
     def even_steps(self) -> tuple[int, float]:
         """The run as whole, even communication steps: (n, h) with n·h the end time and h the
@@ -139,9 +196,20 @@ class Scenario:
         revolutions)."""
         end = self.end_time()
         ratio = end / self.step
+        if not ratio < 1e18 and self.stop_time is None and self.shaft in self.instances \
+                and end / self.revolutions > SLOWEST_TURN:
+            # a revolution of days: the shaft's speed, not the step, is the slip
+            speed = f"{self.shaft}.omega0"
+            omega = self.instances[self.shaft].parameters.get("omega0")
+            raise ScenarioError(f"{self.origin_of(speed)} {speed}"
+                                f"{f' = {omega!r} rad/s' if omega is not None else ''} is so "
+                                f"slow that {_turns(self.revolutions)} take {end:.3g} s, "
+                                f"more than 1e18 steps of {self.step:g} s; give the shaft a "
+                                f"speed")
         if not ratio < 1e18:                 # inf from a subnormal step: not a number of steps
-            raise ScenarioError(f"{self.source}: experiment.step {self.step:g} s makes more than "
-                                f"1e18 steps of a {end:g} s run; take a longer step")
+            step = "experiment.step"
+            raise ScenarioError(f"{self.origin_of(step)} {step} {self.step:g} s makes more "
+                                f"than 1e18 steps of a {end:g} s run; take a longer step")
         n = max(1, math.ceil(ratio * (1.0 - 1e-12)))
         return n, end / n
 
@@ -173,12 +241,13 @@ class Scenario:
 
     def set_value(self, target: str, value: Any, origin: str = "--set") -> None:
         """Apply `instance.parameter = value` (or `experiment.key = value`)."""
-        value = plain(value)
+        value = real(value)             # Decimal, Fraction, numpy's longdouble: the float
         inst, dot, key = target.partition(".")
         if not dot or not key:
             raise ScenarioError(f"{origin} {target}: expected instance.parameter")
         if inst == "experiment":
             self._set_experiment(key, value, origin)
+            self.given[target] = (origin, value if isinstance(value, str) else None)
             return
         if inst not in self.instances:
             raise ScenarioError(f"{origin} {target}: unknown instance {inst!r} in {self.source}"
@@ -191,10 +260,12 @@ class Scenario:
                 raise ScenarioError(f"{origin} {target}: {inst} ({fmu}) has no parameter "
                                     f"{key!r}{did_you_mean(key, known)} "
                                     f"(has: {', '.join(known)})")
+        text = value if isinstance(value, str) and not DECIMAL.fullmatch(value.strip()) \
+            else None
         if isinstance(value, str):          # a value with its unit: "110 deg", "955 rpm"
             value = self._in_declared_unit(inst, key, value, f"{origin} {target}")
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ScenarioError(f"{origin} {target}: value must be a number, got {value!r}")
+            raise ScenarioError(f"{origin} {target}: value must be a number, got {short(value)}")
         try:
             finite = math.isfinite(float(value))
         except OverflowError:               # an integer beyond any float
@@ -203,7 +274,27 @@ class Scenario:
             raise ScenarioError(f"{origin} {target}: parameter {key} must be a finite number "
                                 f"within the range of a float (about ±1.8e308), got "
                                 f"{short(value)}")
+        if text is not None and isinstance(value, float):
+            value = self._snapped(inst, key, value)      # "400 grad": 2π, one rounding above
         self.instances[inst].parameters[key] = value
+        self.given[target] = (origin, text)
+
+    def _snapped(self, inst: str, key: str, value: float) -> float:
+        """A value converted from its unit, the declared bound it lies within a rounding of
+        (format/declared_range.py)."""
+        from sewfmu.scenarios.format.declared_range import (  # only for a unit given
+            bounds_of_own,
+            snapped,
+        )
+
+        fmu = self.instances[inst].fmu
+        if fmu in self.fmu_files:           # an FMU file's own range, or its declared type's
+            md = model_description(self.fmu_files[fmu], "")
+            variable = next((v for v in md.modelVariables if v.name == key), None)
+            low, high = declared_bounds(variable) if variable is not None else (None, None)
+        else:
+            low, high = bounds_of_own(fmu, key) if fmu in FMUS else (None, None)
+        return snapped(value, low, high)
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
@@ -228,7 +319,7 @@ class Scenario:
         if key in choices:
             if value not in choices[key]:
                 raise ScenarioError(f"{origin} experiment.{key}: must be one of {choices[key]}, "
-                                    f"got {value!r}")
+                                    f"got {short(value)}")
             setattr(self, key, value)
             return
         if key == "tolerance":
@@ -238,7 +329,7 @@ class Scenario:
         if key == "fmi":
             if isinstance(value, bool) or value not in FMI_VERSIONS:
                 raise ScenarioError(f"{origin} experiment.fmi: the FMI version of the FMUs, 2 or "
-                                    f"3, got {value!r}")
+                                    f"3, got {short(value)}")
             if self.instances and all(i.fmu in self.fmu_files for i in self.instances.values()):
                 raise ScenarioError(f"{origin} experiment.fmi: chooses the FMI version of "
                                     f"sewfmu's own FMUs; {self.source} runs only FMU files of "
@@ -259,20 +350,20 @@ class Scenario:
         if key == "accept_error":
             if not isinstance(value, bool):
                 raise ScenarioError(f"{origin} experiment.accept_error: true or false, got "
-                                    f"{value!r}")
+                                    f"{short(value)}")
             self.accept_error = value
             return
         if key == "record_every":
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ScenarioError(f"{origin} experiment.record_every: must be a whole number "
-                                    f">= 1, got {value!r}")
+                                    f">= 1, got {short(value)}")
             self.record_every = value
             return
         if key == "shaft":
             if value not in self.instances or self.instances[value].fmu != "MainShaft":
                 shafts = [n for n, i in self.instances.items() if i.fmu == "MainShaft"]
                 raise ScenarioError(f"{origin} experiment.shaft: must name a MainShaft instance "
-                                    f"({', '.join(shafts) or 'none here'}), got {value!r}")
+                                    f"({', '.join(shafts) or 'none here'}), got {short(value)}")
             self.shaft = value
             return
         if key not in ("step", "stop_time", "revolutions"):
@@ -286,6 +377,10 @@ class Scenario:
             self.revolutions = None
         elif key == "revolutions":
             self.stop_time = None
+
+
+def _turns(revolutions: float) -> str:
+    return f"{revolutions:g} revolution{'' if revolutions == 1 else 's'}"
 
 
 def _declared_units(fmu_file: Path) -> dict[str, str]:

@@ -15,11 +15,12 @@ is refused as "100, 200 rpm" would be read otherwise: a bare 100 is rad/s, not r
 """
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from sewfmu.components.units import quoted
-from sewfmu.scenarios.format.quantities import NUMBER_AND_REST, UNIT_START
-from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain, short
+from sewfmu.scenarios.format.quantities import NOT_FINITE, NUMBER_AND_REST, UNIT_START
+from sewfmu.scenarios.format.values import ScenarioError, exact, parse_value, plain, short
 
 LIST_RULE = ("a unit after the last value applies to all (\"100, 200 rpm\"); otherwise give "
              "every value its own (\"100 rad/s, 200 rpm\") or none (the declared unit)")
@@ -57,20 +58,45 @@ def _shared(items: list[str], text: str, where: str, rule: str = LIST_RULE) -> l
                         f"others, which is ambiguous: {rule}")
 
 
+# a list that reads as a number with thousands separators ("1,500 N", "2,500,000"): a first
+# value of one digit, then groups of exactly three digits, without spaces
+_THOUSANDS = re.compile(r"\s*[-+]?\d(?:,\d{3})+(?![\d.,])")
+# a value of a list that starts with a zero followed by a digit ("000", "050 N")
+_LEADING_ZERO = re.compile(r"[-+]?0\d")
+_DIGIT_GROUPS = re.compile(r"\s*([-+]?\d+(?:,\d+)+)")
+
+
 def values_in_text(text: str, where: str) -> list:
     """"100, 200 rpm" -> ["100 rpm", "200 rpm"]; "jacobi, gauss-seidel" -> the two words;
-    "1e-4, 2e-4" -> [0.0001, 0.0002]: each value as --set parses it."""
-    items = [item.strip() for item in text.split(",")]
+    "1e-4, 2e-4" -> [0.0001, 0.0002]: each value as --set parses it. A text that reads as one
+    number with thousands separators ("1,000 N", "2,500") is refused: as a list it would be
+    two values (1 and 0)."""
+    items = [item.strip() for item in str.split(text, ",")]
     if any(not item for item in items):
         raise ScenarioError(f"{where}: {quoted(text)} has an empty value: values are separated "
                             f"by single commas, like \"100, 200, 300 rpm\"")
+    zero = any(_LEADING_ZERO.match(item) for item in items[1:])
+    digits = _DIGIT_GROUPS.match(text)
+    if digits and (zero or _THOUSANDS.match(text)):
+        raise ScenarioError(f"{where}: {quoted(text)} reads as one number with thousands "
+                            f"separators, but a comma separates a list's values (it would be "
+                            f"{len(items)} values: {', '.join(items[:3])}"
+                            f"{', ...' if len(items) > 3 else ''}): write one number without "
+                            f"separators ({digits.group(1).replace(',', '')[:40]}), or a list "
+                            f"with a "
+                            f"space after each comma (\"1, 500 N\")")
     return [parse_value(item, where) for item in _shared(items, text, where)]
 
 
 def range_in_text(text: str, where: str) -> tuple[Any, Any]:
     """"800..1200 rpm" -> ("800 rpm", "1200 rpm"); "15..40" -> (15, 40); "1 mm..2 in" each its
     own. Raises ScenarioError for anything but two numbers with the units of a list."""
-    parts = [part.strip() for part in text.split("..")] if "..." not in text else []
+    parts = [part.strip() for part in str.split(text, "..")] if "..." not in text else []
+    odd = next((p for p in parts if NOT_FINITE.match(p)), None)
+    if odd is not None:
+        raise ScenarioError(f"{where}: {quoted(text)}: the bound {quoted(odd)} is not a finite "
+                            f"number (NaN and infinity are no bounds); give two numbers, like "
+                            f"\"800..1200 rpm\"")
     if len(parts) != 2 or not all(parts) or None in map(unit_of, parts):
         raise ScenarioError(f"{where}: {quoted(text)}: expected LO..HI with an optional unit, "
                             f"like \"800..1200 rpm\" or \"15..40\"")
@@ -91,7 +117,7 @@ def grid_values(values: Any, where: str) -> list:
     """A grid's values for one parameter: a text list ("100, 200 rpm"), a list, tuple, range,
     numpy array or other iterable of values, or one value; each a number, true or false, or a
     text (numpy numbers as Python's)."""
-    values = plain(values)
+    values = exact(values)
     if isinstance(values, str):
         return values_in_text(values, where)
     if hasattr(values, "tolist"):
@@ -102,7 +128,7 @@ def grid_values(values: Any, where: str) -> list:
         values = [values]
     out = []
     for value in values:
-        value = plain(value)
+        value = exact(value)                # a float subclass's own repr is never asked
         if not isinstance(value, (bool, int, float, str)):
             raise ScenarioError(f"{where}: a value is a number, true or false, or a text with its "
                                 f"unit, got {type(value).__name__}")

@@ -36,7 +36,8 @@ def check_values(scenario: Scenario, paths: dict | None = None) -> None:
                 try:
                     check_value(infos[key], value)
                 except ParameterError as err:     # worded as the FMU's initialization says it
-                    raise ScenarioError(f"{scenario.source}: {inst.name}.{key}: {inst.name} "
+                    target = f"{inst.name}.{key}"     # named where it was given
+                    raise ScenarioError(f"{scenario.origin_of(target)} {target}: {inst.name} "
                                         f"({inst.fmu}) refuses it: {err}") from None
     if scenario.study is None:
         planned_steps(scenario)         # the run's size: a step of 1e-12 s is refused here too

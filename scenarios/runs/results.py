@@ -20,6 +20,7 @@ from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import MANIFEST, folder_for, replacing, write_atomic
 from sewfmu.scenarios.format.scenario import Scenario
+from sewfmu.scenarios.format.values import check_scenario_name
 from sewfmu.scenarios.runs.compare import comparison_rows, monolithic_summary
 from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs, variants
 
@@ -47,6 +48,7 @@ def write_outputs(scenario: Scenario, runs: list[tuple[str, RunResult, dict]], o
     what the previous run wrote (outputs.replacing): a failed or interrupted run leaves the
     previous results as they were. `report` is a self-contained page with the plots, the
     animations and, for the punch drive, the comparison with the monolithic solution."""
+    check_scenario_name(scenario.name)      # NAME.png, NAME.gif: never a path out of out_dir
     if animate or report:   # a run without pictures does not load the animations
         from sewfmu.scenarios.mechanisms import animation  # matplotlib, pillow: only for pictures
 

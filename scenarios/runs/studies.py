@@ -7,7 +7,7 @@ from pathlib import Path
 
 from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
-from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.format.values import ScenarioError, check_scenario_name
 from sewfmu.scenarios.mechanisms.base import Study
 
 
@@ -42,6 +42,7 @@ def run_study(scenario: Scenario, out_dir: Path | None, plot: bool = False,
 
     study = study_of(scenario)
     data, summary = study_summary(scenario)
+    check_scenario_name(scenario.name)      # NAME.png: never a path out of out_dir
     if out_dir is None:
         return data, summary
     with replacing(out_dir) as staging:

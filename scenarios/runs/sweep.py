@@ -40,7 +40,7 @@ from sewfmu.scenarios.files.outputs import (
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
-from sewfmu.scenarios.format.values import ScenarioError, label_of
+from sewfmu.scenarios.format.values import ScenarioError, check_scenario_name, label_of
 from sewfmu.scenarios.runs.budget import product, seconds_per_run, worker_count
 from sewfmu.scenarios.runs.progress import bar as progress_line
 from sewfmu.scenarios.runs.sweep_record import (
@@ -195,12 +195,20 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
     for point in points:                        # every override must be valid before any runs
         probe = scenario.copy()
         for target, value in point.values:
-            probe.set_value(target, value, origin=f"{scenario.source}: sweep")
+            probe.set_value(target, value, origin=swept_from(scenario, target))
         # "30 N/mm" and 30000 are one value: the table, the plots and the folders hold the
         # number in the declared unit, as the run used it
         numeric.append(Point(point.index, tuple((target, _as_used(probe, target, value))
                                                 for target, value in point.values)))
     return numeric
+
+
+def swept_from(scenario: Scenario, target: str) -> str:
+    """Where a swept value was given, for a refusal to name: the scenario's [sweep] table, or
+    the grid the command line or the API added (a file the user never touched is no origin)."""
+    spec = scenario.sweep or {}
+    table = {*spec.get("grid", {}), *(k for p in spec.get("points", []) for k in p)}
+    return f"{scenario.source}: sweep" if target in table else "--grid (grid=)"
 
 
 def _as_used(scenario: Scenario, target: str, given):
@@ -282,7 +290,7 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
     for point in points:                  # a misspelt parameter fails here, before any point
         probe = scenario.copy()
         for target, value in point.values:
-            probe.set_value(target, value, origin=f"{scenario.source}: sweep")
+            probe.set_value(target, value, origin=swept_from(scenario, target))
         check_values(probe, paths)
     results = {p.index: f"points/{folder_for(Path('.'), p.label).name}/results.csv"
                for p in points} if keep_results else {}
@@ -480,6 +488,7 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
                    report: bool = False) -> None:
     """The plot of every key figure against the swept parameters (SCENARIO_sweep.png) and, with
     report, report.html beside sweep.csv."""
+    check_scenario_name(scenario.name)      # NAME_sweep.png: never a path out of out_dir
     picture = out_dir / f"{scenario.name}_sweep.png"
     if scenario.analysis:
         figures = {f: unit for f, unit in scenario.figure_units().items()

@@ -172,7 +172,7 @@ BOUNDS = {
     "reversed": (["fit", "punch_drive", "--data", "DATA", "--free", "punch.c2=9e4..5e4"],
                  "the lower bound 90000 N/m is not below the upper bound 50000 N/m"),
     "not a number": (["optimize", "punch_drive", "--vary", "punch.F10=nan..20", "--minimize",
-                      "F2_peak"], "expected LO..HI"),
+                      "F2_peak"], "the bound 'nan' is not a finite number"),
 }
 
 
