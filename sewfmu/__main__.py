@@ -19,7 +19,7 @@ def main(argv=None) -> int:
         signal.signal(sig, _stopped_while_starting)
     from sewfmu.cli import main as command_line  # after the handlers: imports take a moment
 
-    return command_line(argv)
+    return command_line(argv, guard=_stopped_while_starting)
 
 
 if __name__ == "__main__":

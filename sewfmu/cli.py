@@ -15,6 +15,7 @@ from pathlib import Path
 from sewfmu import api, console
 from sewfmu._version import __version__
 from sewfmu.scenarios.cosim import watchdog
+from sewfmu.scenarios.cosim.guardian import guard_a_child
 from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_signals, pending
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
@@ -257,7 +258,15 @@ class _OneLineParser(argparse.ArgumentParser):
                      f"--help` shows the options)\n")
 
 
-def main(argv=None) -> int:
+# the commands that may call an FMU in this process (a sweep or study with one worker too)
+GUARDED = {"run", "compare", "references", "crosscheck", "sweep", "optimize", "fit",
+           "sensitivity"}
+
+
+def main(argv=None, guard=None) -> int:
+    """The command line. `guard` (the `sewfmu` console script's, sewfmu/__main__.py): run the
+    command in a child this process waits for and guards (cosim/guardian.py); `guard` is what a
+    signal does in the child until the command's own handlers are in place."""
     parser = _OneLineParser(prog="sewfmu", description="Sewing-machine mechanisms as "
                                      "FMI 2.0 and 3.0 co-simulation FMUs, and scenarios that connect them.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
@@ -381,6 +390,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.command == "run":
         _one_blas_thread()
+    if guard is not None and args.command in GUARDED:
+        # an FMU whose code holds the interpreter lock for ever leaves no thread of this process
+        # able to end it: the `sewfmu` process the shell waits for does (and gives 130 or 143)
+        watchdog.guarded_by_parent(guard_a_child(guard))
     # from here a signal stops the command cleanly (the start-up's handlers: sewfmu/__main__.py)
     interrupt_on_signals()
     # an FMU call that never returns: the watchdog ends this process with this command's line

@@ -29,6 +29,8 @@ from sewfmu.scenarios.cosim.fmi_calls import (
     kind_of,
 )
 from sewfmu.scenarios.cosim.fmu_cache import extract_cached, is_cached
+from sewfmu.scenarios.cosim.guardian import BEAT, CODE, SIZE, WHERE
+from sewfmu.scenarios.cosim.interrupt import keep_handlers
 from sewfmu.scenarios.cosim.pythonfmu_host import instantiating, release_at_exit
 from sewfmu.scenarios.format.fmu_file import check_binary, model_description
 from sewfmu.scenarios.format.values import ScenarioError
@@ -36,6 +38,8 @@ from sewfmu.scenarios.format.values import ScenarioError
 # FMU file (path, size, mtime) -> (unzip dir, model description), for this process's lifetime:
 # the FMU's library stays loaded (see Instance.release), so it is loaded from one place only.
 _EXTRACTED: dict[tuple, tuple[str, object]] = {}
+# an instance's board before a watched run notes it: written, never read
+_NO_BOARD = memoryview(bytearray(SIZE)).cast("q")
 
 
 def extracted_fmu(path: Path) -> tuple[str, object]:
@@ -159,9 +163,26 @@ class Instance:
     # every input is in its source's unit (scenarios/cosim/connection_units.py)
     in_scales: list[tuple[float, float]] | None = None
 
+    # the guardian's board (cosim/guardian.py): which instance and call the run is in, written
+    # before each call (one store: ~30 ns); slot * 32 is this instance's share of the code
+    board, at = _NO_BOARD, 0
+
+    def note(self, board, slot: int) -> None:
+        """Write where the run is on `board` (a watched run's) as this instance, `slot`."""
+        self.board, self.at = board, slot * 32
+
+    def _calling(self, what: str) -> None:
+        """A call other than the per-step ones: noted with a beat (experiment.step_timeout
+        covers every FMI call)."""
+        self.board[WHERE] = self.at + CODE.get(what, 0)
+        self.board[BEAT] += 1
+
     def instantiate(self) -> None:
+        self._calling("instantiate")
         with instantiating(keep_bytecode=self.cached, carried=self.carried):
             self._instantiate()
+        # an FMU that set its own SIGINT handler (or ignored it) would leave Ctrl-C doing nothing
+        keep_handlers()
         self.instantiated = True
         self.bind()
 
@@ -229,12 +250,14 @@ class Instance:
                 self.in_buf[:] = src.out_buf[start:stop]
             else:
                 self.in_buf[:] = self.input_values()
+            self.board[WHERE] = self.at + 2            # set inputs
             status = self._set_reals()
             if status > WARNING_LEVEL:
                 self.check("set inputs", status)
         if not read:
             return
         if self.n_out:
+            self.board[WHERE] = self.at + 3            # get outputs
             status = self._get_reals()
             if status > WARNING_LEVEL:
                 self.check("get outputs", status)
@@ -290,6 +313,7 @@ class Instance:
             raise FmiCallError("get outputs", Status.ERROR, self)
 
     def do_step(self, t: float, h: float) -> None:
+        self.board[WHERE] = self.at + 1                # doStep
         status = self._do_step(t, h)
         if status > WARNING_LEVEL:
             self.check("doStep", status)
@@ -327,6 +351,7 @@ class Fmi2Instance(Instance):
 
     def _call(self, what: str, call, *args):
         """A call through fmpy's wrapper, its failure turned into sewfmu's FmiCallError."""
+        self._calling(what)
         try:
             return call(*args)
         except FMICallException as err:
@@ -375,10 +400,12 @@ class Fmi2Instance(Instance):
     def release(self) -> None:
         """Terminate and free, but keep the library loaded for the next instance of this FMU
         (unloading pythonfmu's binary from a Python host is unsafe: pythonfmu_host.py)."""
+        self._calling("terminate")
         try:
             self.fmu.terminate()
         except Exception:
             pass
+        self._calling("freeInstance")
         self._function("free")(self.fmu.component)
         self.fmu.component = None
         self.instantiated = False

@@ -13,6 +13,7 @@ decides) stays ignored.
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
 import threading
@@ -20,6 +21,9 @@ import threading
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 pending: list[int] = []         # signals received within deferred(), oldest first
+board = None                    # the watched run's guardian.Board (watchdog.py), or None
+_installed: list[dict] = []     # per deferred() block: the handlers it installed, and replaced
+_own = False                    # interrupt_on_signals() made SIGINT and SIGTERM sewfmu's
 
 
 class Interrupted(KeyboardInterrupt):
@@ -47,9 +51,18 @@ class Interrupted(KeyboardInterrupt):
 
 
 def raise_pending() -> None:
+    """Act on the first signal received (the first decides): a user's own handler that
+    deferred() replaced is called now, between two steps (it may stop the run by raising, or let
+    it go on); otherwise Interrupted."""
     if pending:
         signum = pending[0]
         pending.clear()
+        if board is not None:                 # answered: the guardian need not step in
+            board.q[4] = board.q[3]           # guardian.ANSWERED = RELAYED
+        replaced = _installed[-1]["replaced"].get(signum) if _installed else None
+        if callable(replaced) and replaced not in (_interrupt, signal.default_int_handler):
+            replaced(signum, None)
+            return
         raise Interrupted(signum)
 
 
@@ -69,7 +82,9 @@ def interrupt_on_signals() -> None:
     """SIGINT and SIGTERM raise Interrupted (SIGTERM's default would end the process without
     cleaning up: staging folders, worker processes); one raised where Python drops exceptions
     is raised again when the next run starts."""
+    global _own
     if threading.current_thread() is threading.main_thread():
+        _own = True
         for s in SIGNALS:
             signal.signal(s, _interrupt)
         if not getattr(sys.unraisablehook, "keeps_interruptions", False):
@@ -95,12 +110,41 @@ def deferred():
         return
     raise_pending()              # one received before, and lost where it was raised
     previous = {s: signal.getsignal(s) for s in SIGNALS}
-    for s in SIGNALS:
-        if previous[s] is not signal.SIG_IGN:      # an ignored signal stays ignored
-            signal.signal(s, _mark)
+    mine = {s: _mark for s in SIGNALS if previous[s] is not signal.SIG_IGN}   # ignored stays so
+    _installed.append({"mine": mine, "replaced": previous})
+    for s, handler in mine.items():
+        signal.signal(s, handler)
     try:
         yield
-    finally:
+        _installed.pop()
         for s, handler in previous.items():
             signal.signal(s, handler)
-    raise_pending()
+        raise_pending()
+    except Interrupted as err:
+        if _installed and _installed[-1]["mine"] is mine:
+            _installed.pop()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        if err.signum == signal.SIGTERM and previous[signal.SIGTERM] is signal.SIG_DFL:
+            # a process that left SIGTERM at its default (a user's script) ends as that default
+            # ends it, now that the run is cleaned up: a KeyboardInterrupt would let it go on
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGTERM])
+            os.kill(os.getpid(), signal.SIGTERM)
+        raise
+    except BaseException:
+        if _installed and _installed[-1]["mine"] is mine:
+            _installed.pop()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        raise
+
+
+def keep_handlers() -> None:
+    """Put sewfmu's handlers back: an FMU may set its own (or ignore SIGINT) while it is
+    instantiated, and Ctrl-C would then do nothing. Called after every instantiate."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    handlers = _installed[-1]["mine"] if _installed else \
+        ({s: _interrupt for s in SIGNALS} if _own else {})
+    for s, handler in handlers.items():
+        signal.signal(s, handler)           # also where C code changed it behind Python's back

@@ -194,6 +194,11 @@ class Master:
             algorithm.plan(system)
             system.plan_records()
             self._phase = "initialization"
+            # where the run is, for the guardian of a process whose FMU holds the GIL
+            paper = watchdog.board()
+            paper.names([inst.name for inst in system.instances])
+            for slot, inst in enumerate(system.instances):
+                inst.note(paper.q, slot)
             for inst in system.instances:
                 # a signal while the FMUs load stops the run between two of them
                 interrupt.raise_pending()
@@ -271,10 +276,14 @@ class Master:
         advance, system, h, n, stop = (self.algorithm.advance, self.system, self.h,
                                        self.n_steps, self.stop)
         watch, record, every, dense_k = self.watch, self.recorder.record, self.every, self.dense_k
+        paper = watchdog.board()
+        beat, now = paper.q, paper.d        # a beat and the time per step: ~0.1 µs
         k = self.k
         end = min(n, k + count)
         while k < end:
             t = k * h
+            beat[1] += 1                       # guardian.BEAT
+            now[8] = t                         # guardian.T
             if self._closing:                  # close() asked from another thread
                 self._require_open("steps")
             try:                   # (no context manager here: this is the hot path)
@@ -297,6 +306,9 @@ class Master:
         """One step of an algorithm that sizes its own: it ends its last step at the stop time."""
         t = self.t
         limit = self.stop - t
+        paper = watchdog.board()
+        paper.q[1] += 1                        # guardian.BEAT
+        paper.d[8] = t                         # guardian.T
         try:
             taken = self.algorithm.advance(self.system, t, limit)
         except FmiCallError as err:

@@ -14,8 +14,13 @@ call that never returns cannot be unwound. experiment.step_timeout is watched by
 which then samples the run's step counter (only then: the thread otherwise only waits).
 
 In a process that is not sewfmu's own (the API in a script or a notebook) the thread does not end
-the process at the first signal: it says where the run is stuck and that a second signal ends the
-process.
+the process at the first SIGINT: it says where the run is stuck and that a second signal ends the
+process (SIGTERM ends it at once).
+
+All of this needs the interpreter lock; an FMU whose code holds it for ever (a C loop inside a
+pythonfmu doStep) is guardian.py's: a process beside this one reads the wakeup pipe (passing each
+byte on to this thread) and the board the run writes (a beat per step and per FMI call), and ends
+this process when nothing here answers.
 """
 from __future__ import annotations
 
@@ -29,6 +34,8 @@ import threading
 import time
 
 # nothing heavy (no fmpy): the command line imports this module before it knows its command
+from sewfmu.scenarios.cosim import guardian, interrupt
+from sewfmu.scenarios.cosim.guardian import ANSWERED, BEAT, ENDING, IDLE, RELAYED, RUNNING, WHERE
 from sewfmu.scenarios.cosim.interrupt import Interrupted
 
 GRACE = 0.5        # s the main thread has to reach its check between two steps after a signal
@@ -45,8 +52,46 @@ _timeout: float | None = None
 _writer = None                # writer(result, reason) -> "the record up to t = … s is in …"
 _instead = None               # (RunResult, where): the record to keep instead of the run's own
 _end = None                   # end(err) -> never returns: the process owner's way out
-_pipe: tuple[int, int] | None = None
+_pipe: tuple[int, int] | None = None   # (read, write): the thread's (relayed by the guardian)
+_wake: int | None = None      # the wakeup fd: the guardian reads it
 _pid = None                   # the process the pipe and the thread belong to (not a fork's)
+_board = None                 # guardian.Board: what the run writes for its guardian
+_given = None                 # (board, wake, relay read, relay write) from a waiting parent
+_mode, _conn = "api", None    # how the guardian ends this process (guardian.serve)
+_guard = None                 # the guardian process this one started
+
+
+class _Unwatched:
+    """The board of a process no guardian reads (before its first run): written, never read."""
+
+    def __init__(self):
+        page = bytearray(guardian.SIZE)
+        self.q, self.d = memoryview(page).cast("q"), memoryview(page).cast("d")
+
+    def names(self, names) -> None:
+        pass
+
+
+def board():
+    """The board the run writes for the guardian (nothing reads it outside a watched run)."""
+    return _board or _UNWATCHED
+
+
+_UNWATCHED = _Unwatched()
+
+
+def guarded_by_parent(given) -> None:
+    """This process is a child the `sewfmu` process waits for and guards
+    (guardian.guard_a_child): its board and pipes."""
+    global _given, _mode
+    _given, _mode = given, "own"
+
+
+def guard_mode(mode: str, conn: int | None = None) -> None:
+    """How a guardian ends this process: "worker" (a sweep's, `conn` its pipe to the main
+    process), "own" (sewfmu's command), "api" (a user's: the default)."""
+    global _mode, _conn
+    _mode, _conn = mode, conn
 
 
 class Steps:
@@ -101,12 +146,18 @@ def watching(master):
         yield
         return
     _start()
-    # Python's C-level handler writes the signal's number here: it wakes the watchdog wherever
-    # the main thread is (the handler that marks interrupt.pending runs only between bytecodes)
-    previous = signal.set_wakeup_fd(_pipe[1], warn_on_full_buffer=False)
+    # Python's C-level handler writes the signal's number to the wakeup fd: it wakes the
+    # guardian (which passes it on to the watchdog thread) wherever the main thread is (the
+    # handler that marks interrupt.pending runs only between bytecodes)
+    previous = signal.set_wakeup_fd(_wake, warn_on_full_buffer=False)
     with _lock:
         _run, _timeout = master, getattr(master.scenario, "step_timeout", None)
         _left.clear()
+    paper = board()
+    paper.q[WHERE], paper.d[guardian.TIMEOUT] = -1, _timeout or 0.0
+    paper.q[ANSWERED] = paper.q[RELAYED]
+    paper.q[guardian.STATE] = RUNNING
+    interrupt.board = _board
     _poke()
     try:
         yield
@@ -115,17 +166,29 @@ def watching(master):
             with _lock:
                 _run, _timeout = None, None
                 _left.set()
+                paper.q[guardian.STATE] = IDLE
         signal.set_wakeup_fd(previous)
         _poke()
 
 
 def _start() -> None:
     """The pipe and the thread, once per process (a forked child starts its own)."""
-    global _pipe, _pid
+    global _pipe, _pid, _wake, _board, _guard
     if _pid == os.getpid():
         return
-    read, write = os.pipe()
-    os.set_blocking(write, False)              # set_wakeup_fd's rule
+    if _given is not None:                    # the parent waiting for this process guards it
+        _board, _wake, read, write = _given
+    else:
+        _board = guardian.Board()
+        wake_r, _wake = os.pipe()
+        read, write = os.pipe()
+        os.set_blocking(_wake, False)          # set_wakeup_fd's rule
+        os.set_blocking(write, False)
+        try:
+            _guard = guardian.spawn(_board, wake_r, write, _mode, _conn)
+        except OSError:       # no guardian: the thread reads the wakeup fd itself
+            _guard, _wake = None, write
+        os.close(wake_r)
     _pipe, _pid = (read, write), os.getpid()
     threading.Thread(target=_watch, args=(read,), name="sewfmu-watchdog", daemon=True).start()
 
@@ -137,7 +200,7 @@ def _poke() -> None:
 
 
 def _watch(read: int) -> None:
-    seen, since, warned = None, 0.0, None
+    seen, since, warned, first_signal = None, 0.0, None, {}
     while True:
         limit = _timeout
         # the step counter sampled at most every 0.1 s (each sample takes the GIL from the
@@ -148,19 +211,25 @@ def _watch(read: int) -> None:
         run = _run
         if run is None:
             seen = warned = None
+            first_signal.clear()
             continue
         try:
             if signals:
+                first = first_signal.get(run) or signals[0]   # the first signal decides
+                first_signal[run] = first
                 if warned is run:                   # a second signal to a stuck run: now
-                    _finish(run, Interrupted(signals[-1]))
-                elif not _left.wait(GRACE):
-                    warned = _stuck(run, Interrupted(signals[-1]))
-            if limit is None or getattr(run, "_phase", "") != "step":
+                    _finish(run, Interrupted(first))
+                elif not _answered_within(GRACE):
+                    warned = _stuck(run, Interrupted(first))
+            paper = board()
+            # every FMI call is under the limit: from the first (instantiate) on, a beat at each
+            # communication step and each other call (nothing before: unpacking, loading)
+            if limit is None or (paper.q[WHERE] < 0 and getattr(run, "_phase", "") != "step"):
                 seen = None
                 continue
             now = time.monotonic()
-            if seen != (run, run.k):
-                seen, since = (run, run.k), now
+            if seen != (run, run.k, paper.q[BEAT]):
+                seen, since = (run, run.k, paper.q[BEAT]), now
             elif now - since > limit and warned is not run:
                 warned = _stuck(run, None, limit)
         except Exception:          # the watchdog outlives a failure of its own: the next run
@@ -170,12 +239,29 @@ def _watch(read: int) -> None:
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+def _answered_within(grace: float) -> bool:
+    """Whether the main thread answers the signals so far within `grace` (it leaves the run, or
+    a user's own handler took them between two steps: interrupt.raise_pending)."""
+    paper, deadline = board(), time.monotonic() + grace
+    while not _left.wait(min(0.05, max(0.0, deadline - time.monotonic()))):
+        if paper.q[ANSWERED] >= paper.q[RELAYED] > 0 or time.monotonic() >= deadline:
+            return paper.q[ANSWERED] >= paper.q[RELAYED] > 0
+    return True
+
+
+def _answer() -> None:
+    """Tell the guardian this process answers (the lock is not held)."""
+    paper = board()
+    paper.q[ANSWERED] = paper.q[RELAYED]
+
+
 def _stuck(run, err: Interrupted | None, limit: float | None = None):
     """The main thread has not answered the signal `err` (or its step has run beyond `limit`):
     end the run; in a process that is not sewfmu's own, say where it is stuck instead and return
     the run, which the next signal ends."""
-    if _end is not None:
-        _finish(run, err, limit)
+    _answer()
+    if _end is not None or (err is not None and err.signum == signal.SIGTERM):
+        _finish(run, err, limit)        # SIGTERM ends a user's process too, as its default does
         return None
     with _lock:
         if _run is not run:
@@ -205,6 +291,7 @@ def _finish(run, err: Interrupted | None, limit: float | None = None) -> None:
     with _ending:
         if _run is not run:
             return
+        board().q[guardian.STATE] = ENDING      # the guardian leaves the ending to this thread
         if err is not None:
             _interrupted(run, err)
             result, reason = err.result, err.reason
@@ -261,6 +348,10 @@ def _default_end(err) -> None:
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()
+    if isinstance(err, Interrupted) and err.signum == signal.SIGTERM:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)      # ended as SIGTERM's default ends
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGTERM])
+        os.kill(os.getpid(), signal.SIGTERM)
     os._exit(err.exit_status if isinstance(err, Interrupted) else 1)
 
 

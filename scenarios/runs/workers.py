@@ -5,9 +5,13 @@ killed (as the out-of-memory killer does) breaks the whole pool and every pendin
 Here each worker holds one point at a time through its own pipe, so a worker that dies is one
 failed point, with the cause (its signal or exit status), and a fresh worker takes the next.
 
-A worker ends with the main process however that ends: on Linux the kernel kills it when its
-parent (the forkserver, which itself exits when the main process is gone) dies, and a watchdog
-thread in every worker checks that the main process still exists, for a kill -9 or a crash.
+A worker ends with the main process however that ends, a kill -9 too, and even while an FMU's
+code holds the worker's interpreter lock (no thread of the worker can run then): each worker
+holds the read end of a pipe ("life") whose write end only the main process has, and asks the
+kernel (O_ASYNC, F_SETSIG) for SIGKILL when it closes, which it does when the main process ends.
+(The forkserver cannot be relied on: every worker holds its "alive" pipe, so it outlives the main
+process as long as a worker does.) A watchdog thread that checks the main process still exists
+stands in where the kernel has no F_SETSIG.
 Workers ignore Ctrl-C: the terminal sends it to the whole process group, and the main process
 decides what an interruption stops (it terminates the workers, all at once: one stuck in an FMU
 call ends by its watchdog, scenarios/cosim/watchdog.py, or is killed a second later). A point
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import fcntl
 import multiprocessing
 import os
 import signal
@@ -34,6 +39,7 @@ from sewfmu.scenarios.cosim import watchdog
 from sewfmu.scenarios.cosim.interrupt import Interrupted
 
 _PR_SET_PDEATHSIG = 1
+_F_SETSIG = getattr(fcntl, "F_SETSIG", 10)      # Linux's number; Python 3.11 does not name it
 WATCHDOG_PERIOD = 0.5      # s between the worker's checks that the main process is alive
 STOP_WAIT = 1.0            # s the workers have to end after SIGTERM before SIGKILL
 
@@ -42,10 +48,20 @@ class WorkerDied(RuntimeError):
     """The worker process running a task ended before it answered."""
 
 
-def _end_with(main_pid: int) -> None:
-    """Make this worker end when the main process does."""
+def _end_with(main_pid: int, life) -> None:
+    """Make this worker end when the main process does: SIGKILL from the kernel when the main
+    process's end of `life` closes (no thread of this process needs to run)."""
     try:                      # Linux: SIGKILL when the parent (forkserver) goes
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+    try:
+        fd = life.fileno()
+        fcntl.fcntl(fd, fcntl.F_SETOWN, os.getpid())
+        fcntl.fcntl(fd, _F_SETSIG, signal.SIGKILL)
+        fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) | os.O_ASYNC)
+        if os.getppid() == 1 or not _alive(main_pid):      # gone before the request
+            os._exit(1)
     except (OSError, AttributeError):
         pass
 
@@ -60,6 +76,16 @@ def _end_with(main_pid: int) -> None:
                 pass
 
     threading.Thread(target=watch, name="sewfmu-watchdog", daemon=True).start()
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    return True
 
 
 def forkserver_context(preload) -> multiprocessing.context.BaseContext:
@@ -84,11 +110,13 @@ def forkserver_context(preload) -> multiprocessing.context.BaseContext:
     return context
 
 
-def _serve(conn, main_pid: int) -> None:
+def _serve(conn, main_pid: int, life) -> None:
     """A worker's life: run tasks from the pipe until told to stop or the pipe closes."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _end_with(main_pid)
+    _end_with(main_pid, life)
     watchdog.end_process_with(partial(_end_stuck, conn))
+    # a point whose FMU holds the GIL beyond step_timeout: its guardian tells the main process
+    watchdog.guard_mode("worker", conn.fileno())
     while True:
         try:
             task = conn.recv()
@@ -147,10 +175,12 @@ def _main_script_hidden():
 class _Worker:
     def __init__(self, context, main_pid: int):
         self.conn, child = context.Pipe()
-        self.process = context.Process(target=_serve, args=(child, main_pid), daemon=True)
+        life, self.life = context.Pipe(duplex=False)     # only this process writes: never
+        self.process = context.Process(target=_serve, args=(child, main_pid, life), daemon=True)
         with _main_script_hidden(), safe_path():     # a fork server that died starts anew here
             self.process.start()
         child.close()
+        life.close()
         self.task = None
 
     def give(self, task) -> None:
@@ -176,6 +206,8 @@ def stop_all(workers: list[_Worker], wait_for: float = STOP_WAIT) -> None:
         if worker.process.is_alive():
             worker.process.kill()
             worker.process.join(wait_for)
+        with contextlib.suppress(OSError, ValueError):
+            worker.life.close()          # (the kernel's SIGKILL to a worker still there)
 
 
 class WorkerPool:

@@ -29,34 +29,49 @@ OMEGA0 = 100.0          # rad/s, the shaft's speed
 WITHIN = 2.0            # s from the signal to the end of the process
 
 HANG_PY = '''
+import itertools
 import os
+import signal
 import time
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
 
 class Hang(Fmi2Slave):
-    """x = t; the doStep from t = hang_at never returns: asleep (mode 0) or spinning in pure
-    Python (mode 1). It touches $HANG_MARKER when it starts hanging."""
+    """x = t; the doStep from t = hang_at never returns: asleep (mode 0), spinning in pure
+    Python (mode 1), or in a C loop holding the interpreter lock (mode 2); mode 3 sleeps in
+    exitInitializationMode. It touches $HANG_MARKER when it starts hanging; with
+    $HANG_IGNORE_SIGINT it ignores SIGINT from its instantiation on."""
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        if os.environ.get("HANG_IGNORE_SIGINT"):
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         self.hang_at, self.mode, self.x = 1e9, 0.0, 0.0
         for name in ("hang_at", "mode"):
             self.register_variable(Real(name, causality=Fmi2Causality.parameter,
                                         variability=Fmi2Variability.tunable))
         self.register_variable(Real("x", causality=Fmi2Causality.output))
 
+    def exit_initialization_mode(self):
+        if self.mode == 3.0:
+            self._hang()
+
+    def _hang(self):
+        marker = os.environ.get("HANG_MARKER")
+        if marker:
+            open(os.path.join(marker, str(os.getpid())), "w").close()
+        if self.mode in (0.0, 3.0):
+            while True:
+                time.sleep(3600)
+        if self.mode == 2.0:
+            sum(itertools.repeat(0))
+        while True:
+            pass
+
     def do_step(self, current_time, step_size):
         if current_time >= self.hang_at - 1e-12:
-            marker = os.environ.get("HANG_MARKER")
-            if marker:
-                open(os.path.join(marker, str(os.getpid())), "w").close()
-            if self.mode == 0.0:
-                while True:
-                    time.sleep(3600)
-            while True:
-                pass
+            self._hang()
         self.x = current_time + step_size
         return True
 '''
@@ -72,6 +87,11 @@ SPINNING = ("fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     """Hang.fmu (pythonfmu) and, where gcc is, Spin.fmu (C): built once for the module."""
+    return build_fmus(tmp_path_factory)
+
+
+def build_fmus(tmp_path_factory) -> dict:
+    """The FMUs of `fmus` (tests/cosim/test_gil_held.py builds them too)."""
     from pythonfmu import FmuBuilder  # pythonfmu: only the tests that build an FMU need it
 
     folder = tmp_path_factory.mktemp("stuck_fmus")

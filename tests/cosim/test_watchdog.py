@@ -102,9 +102,15 @@ def test_a_signal_to_a_run_stuck_in_do_step_ends_it_after_the_grace(hook):
 
 def test_a_signal_the_main_thread_answers_in_time_is_no_business_of_the_watchdog(hook):
     model = Blocking(at=10.0, delay=0.05)   # slow steps, none stuck
+    # SIGTERM as the command line has it (left at its default, it would end pytest: as it must)
+    before = signal.signal(signal.SIGTERM, interrupt._interrupt)
     threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGTERM)).start()
-    with pytest.raises(interrupt.Interrupted) as caught:
-        _run(model, stop=100.0).run()
+    try:
+        with pytest.raises(interrupt.Interrupted) as caught:
+            _run(model, stop=100.0).run()
+    finally:
+        signal.signal(signal.SIGTERM, before)
+        interrupt.pending.clear()
     assert hook.handed == []
     err = caught.value
     assert err.exit_status == 143

@@ -28,6 +28,7 @@ class Jacobi(Algorithm):
         # inst.do_step(t, h) written out: this loop runs every step (a call less per instance)
         instances = system.instances
         for inst in instances:
+            inst.board[2] = inst.at + 1           # guardian.WHERE: doStep
             status = inst._do_step(t, h)
             if status > WARNING_LEVEL:
                 inst.check("doStep", status)
