@@ -138,3 +138,89 @@ def test_a_run_s_methods_refuse_hostile_arguments_in_one_line():
         for hostile in (*HOSTILE.values(), 1.5, -1, 10 ** 9, 10 ** 100):
             _call_and_judge(getattr(run, method), {parameter: hostile})
     assert len(run.mechanism(frames=4)["crank_deg"]) == 4
+
+
+def _raising_generator():
+    yield 100.0
+    raise ValueError("the caller's generator fails")
+
+
+class _HugeLength:
+    def __len__(self):
+        return 10 ** 30
+
+    def __iter__(self):
+        return iter([100.0])
+
+
+class _LengthRaises:
+    def __len__(self):
+        raise RuntimeError("len fails")
+
+
+class _IterRaises:
+    def __iter__(self):
+        raise RuntimeError("iter fails")
+
+
+class _KeyStrRaises:
+    def __str__(self):
+        raise RuntimeError("str fails")
+
+    def __hash__(self):
+        return 1
+
+
+class _FloatReprRaises(float):
+    def __repr__(self):
+        raise RuntimeError("repr fails")
+
+    def __format__(self, spec):
+        raise RuntimeError("format fails")
+
+
+class _TextSplitRaises(str):
+    def split(self, *args):
+        raise RuntimeError("split fails")
+
+    def strip(self, *args):
+        raise RuntimeError("strip fails")
+
+    def __repr__(self):
+        raise RuntimeError("repr fails")
+
+
+@pytest.mark.parametrize("grid, says", [
+    ({"shaft.omega0": _raising_generator()}, "grid: reading it raised ValueError: the caller's"),
+    ({"shaft.omega0": _HugeLength()}, "grid: reading it raised OverflowError"),
+    ({"shaft.omega0": _LengthRaises()}, "grid: reading it raised RuntimeError: len fails"),
+    ({"shaft.omega0": _IterRaises()}, "grid: reading it raised RuntimeError: iter fails"),
+    ({_KeyStrRaises(): [100.0]}, "grid: reading it raised RuntimeError: str fails"),
+    # read as the plain values they hold: the one point out of range is refused by its number
+    ({"shaft.omega0": [_FloatReprRaises(100.0), _FloatReprRaises(5000.0)]}, "= 5000 rad/s"),
+    ({"shaft.omega0": _TextSplitRaises("100, 5000 rad/s")}, "= 5000 rad/s"),
+])
+def test_a_hostile_object_in_grid_is_one_line_naming_the_argument(grid, says):
+    """From the attack: each of these leaked its own exception out of sewfmu.sweep."""
+    with pytest.raises(sewfmu.ScenarioError) as bad:
+        sewfmu.sweep("punch_drive", grid=grid, max_runs=4)
+    assert says in str(bad.value) and "\n" not in str(bad.value), str(bad.value)
+
+
+@pytest.mark.parametrize("given, says", [
+    ({_KeyStrRaises(): 1.0}, "set: reading it raised RuntimeError: str fails"),
+    ({"shaft.omega0": object()}, "a value is a number, true or false, or a text"),
+    ({"shaft.omega0": [100.0]}, "a value is a number, true or false, or a text"),
+])
+def test_a_hostile_object_in_set_is_one_line_naming_the_argument(given, says):
+    for call in (sewfmu.load, sewfmu.check, sewfmu.run):
+        with pytest.raises(sewfmu.ScenarioError) as bad:
+            call("punch_drive", set=given)
+        assert says in str(bad.value) and "\n" not in str(bad.value), str(bad.value)
+
+
+def test_a_subclass_s_own_methods_are_not_asked_for_its_value():
+    sc = sewfmu.check("punch_drive", set={"shaft.omega0": _FloatReprRaises(150.0),
+                                          "punch.F30": _TextSplitRaises("20 N")})
+    assert sc.instances["shaft"].parameters["omega0"] == 150.0
+    assert sc.instances["punch"].parameters["F30"] == 20.0
