@@ -109,7 +109,7 @@ def short(value: Any) -> str:
     value = plain(value)
     if not isinstance(value, _SHOWN) and type(value).__module__ not in (
             "decimal", "fractions", "pathlib", "numpy"):
-        return f"a {type(value).__qualname__} object"
+        return f"an object of type {type(value).__name__}"
     if isinstance(value, int) and not isinstance(value, bool):
         try:
             text = int.__repr__(value)      # a subclass's own repr is not asked
@@ -120,9 +120,9 @@ def short(value: Any) -> str:
         text = (str.__repr__(value) if isinstance(value, str) else
                 float.__repr__(value) if isinstance(value, float) else repr(value))
     except Exception:               # noqa: BLE001 - an item whose repr fails
-        return f"a {type(value).__qualname__} object"
+        return f"an object of type {type(value).__name__}"
     if not isinstance(text, str):
-        return f"a {type(value).__qualname__} object"
+        return f"an object of type {type(value).__name__}"
     return text if len(text) <= 40 else f"{text[:28]}...{text[-6:]} ({len(text)} characters)"
 
 

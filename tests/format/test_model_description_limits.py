@@ -7,6 +7,7 @@ import zipfile
 
 import pytest
 
+import sewfmu
 from sewfmu.cli import main
 from sewfmu.scenarios.format.fmu_file import MAX_XML_BYTES, model_description
 from sewfmu.scenarios.format.values import ScenarioError
@@ -33,6 +34,11 @@ def test_an_fmi_1_fmu_is_named_as_such(tmp_path, capsys):
     assert main(["references", "--fmu", str(fmu)]) == 1
     assert capsys.readouterr().err.strip().endswith("FMI 1.0 is not supported (FMI 2.0 and 3.0 "
                                                     "are)")
+    scenario = tmp_path / "old.toml"         # a run of it: the same line, not fmpy's
+    scenario.write_text('[experiment]\nstop_time = 0.01\nstep = 0.001\n'
+                        '[instances.old]\nfmu = "old.fmu"\n')
+    with pytest.raises(ScenarioError, match=r"instances.old: old.fmu: FMI 1.0 is not supported"):
+        sewfmu.run(str(scenario))
     without = _fmu(tmp_path / "none.fmu", FMI1.replace(' fmiVersion="1.0"', ""))
     with pytest.raises(ScenarioError, match="without fmiVersion is not supported"):
         model_description(without, "")
