@@ -212,6 +212,10 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
     a progress bar on the terminal; a function instead, `progress(done, total)`, hears of the
     communication steps as they are done (a page's progress bar)."""
+    from sewfmu.scenarios.cosim.interrupt import (  # loaded on first use (start-up time)
+        Interrupted,
+        deferred,
+    )
     from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
     from sewfmu.scenarios.runs.results import (  # loaded on first use (start-up time)
@@ -239,12 +243,24 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
         told = (lambda label, done, total: progress(done, total)) if callable(progress) else bar
         try:
             runs = run_variants(sc, Path(fmu_dir) if fmu_dir else None, told)
+        except Interrupted as err:
+            # the record so far as a sewfmu.Run (err.result stays the engine's, for the CLI)
+            err.run = None if err.result is None else _run_of(
+                sc.name, err.result, {}, None, sc.shaft or sc.default_shaft())
+            raise
         finally:
             if bar is not None:
                 bar.close()
         if out is not None:
             try:
-                write_outputs(sc, runs, Path(out), plot=plot, animate=animate, report=report)
+                # a signal while the files are written is answered once they are, whole: the
+                # finished run is not thrown away (a few seconds at most; no FMU is called)
+                with deferred():
+                    write_outputs(sc, runs, Path(out), plot=plot, animate=animate,
+                                  report=report)
+            except Interrupted as err:
+                err.where, err.kept = "after the run", f"its files are written whole in {out}"
+                raise
             except OSError as err:
                 raise cannot_write(err, out) from None
     out = Path(out) if out is not None else None

@@ -16,7 +16,7 @@ from sewfmu import api, console
 from sewfmu._version import __version__
 from sewfmu.scenarios.cosim import watchdog
 from sewfmu.scenarios.cosim.guardian import guard_a_child
-from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_signals, pending
+from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_signals, settled
 from sewfmu.scenarios.format.loader import load
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 
@@ -79,10 +79,10 @@ def cmd_run(args) -> None:
         raise
     except Interrupted as err:
         if err.result is not None and err.kept is None:
-            try:
+            try:          # (a second signal now is not raised over this one: interrupt.py)
                 err.kept = keep(err.result, err.reason)
-            except (Exception, KeyboardInterrupt):    # unwritable, or interrupted again
-                pass
+            except Exception as why:     # unwritable, or a user's file in the way: said why
+                err.kept = f"its record was not written: {console.explain(why, 'run')}"
         raise
     console.print_run(scenario.name, run, out)
 
@@ -405,7 +405,7 @@ def main(argv=None, guard=None) -> int:
         args.func(args)
         sys.stdout.flush()
     except KeyboardInterrupt as err:
-        pending.clear()                     # said here: main() called by a process that goes on
+        settled()                           # said here: main() called by a process that goes on
         print(_interrupted_line(err, args.command), file=sys.stderr)
         return err.exit_status if isinstance(err, Interrupted) else 130
     except BrokenPipeError:

@@ -24,6 +24,9 @@ pending: list[int] = []         # signals received within deferred(), oldest fir
 board = None                    # the watched run's guardian.Board (watchdog.py), or None
 _installed: list[dict] = []     # per deferred() block: the handlers it installed, and replaced
 _own = False                    # interrupt_on_signals() made SIGINT and SIGTERM sewfmu's
+# the signal of the interruption under way in sewfmu's own process: the first decides, and a
+# later one (a second Ctrl-C while the record is written) is not raised over it
+under_way: int | None = None
 
 
 class Interrupted(KeyboardInterrupt):
@@ -38,6 +41,7 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
         self.where = where
         self.result = None
+        self.run = None           # the record so far as a sewfmu.Run (sewfmu.run sets it)
         self.kept: str | None = None
 
     @property
@@ -63,7 +67,22 @@ def raise_pending() -> None:
         if callable(replaced) and replaced not in (_interrupt, signal.default_int_handler):
             replaced(signum, None)
             return
-        raise Interrupted(signum)
+        _raising(signum)
+
+
+def _raising(signum: int):
+    """Raise the interruption by `signum`; in sewfmu's own process it is the one under way."""
+    global under_way
+    if _own and under_way is None:
+        under_way = signum
+    raise Interrupted(signum)
+
+
+def settled() -> None:
+    """The interruption under way has been said (main() called by a process that goes on)."""
+    global under_way
+    pending.clear()
+    under_way = None
 
 
 def _mark(signum, frame) -> None:
@@ -74,8 +93,10 @@ def _interrupt(signum, frame) -> None:
     # noted before it is raised: raised where Python ignores exceptions (a weakref callback of
     # an import, a __del__: "Exception ignored in ...") it would be lost, and a run started next
     # would go on; deferred() raises it again
+    if under_way is not None:        # one is being answered (its record written): it decides
+        return
     pending.append(signum)
-    raise Interrupted(signum)
+    _raising(signum)
 
 
 def interrupt_on_signals() -> None:

@@ -279,10 +279,19 @@ def _overdue(run, limit: float) -> str:
     """What a step beyond experiment.step_timeout is, as the line says it."""
     inst, call = stuck_call()
     if inst is None:
-        return (f"the step from t = {run.t:g} s took longer than experiment.step_timeout = "
+        said = (f"the step from t = {run.t:g} s took longer than experiment.step_timeout = "
                 f"{limit:g} s")
-    return f"{inst} took longer than experiment.step_timeout = {limit:g} s in {call} at " \
-           f"t = {run.t:g} s"
+    else:
+        said = f"{inst} took longer than experiment.step_timeout = {limit:g} s in {call} at " \
+               f"t = {run.t:g} s"
+    return said + _of_the_estimate()
+
+
+def _of_the_estimate() -> str:
+    """Where the stuck run is the coarser run of the coupling-error estimate (its time is not
+    the record's: the record kept is the finished run's)."""
+    return " of the coarser run that estimates the coupling error, after the run" \
+        if _instead is not None else ""
 
 
 def _finish(run, err: Interrupted | None, limit: float | None = None) -> None:
@@ -299,8 +308,10 @@ def _finish(run, err: Interrupted | None, limit: float | None = None) -> None:
             result, reason = _record_of(run), _overdue(run, limit)
         kept = None
         if result is not None and _writer is not None:
-            with contextlib.suppress(Exception):        # the line is said whatever happens
+            try:
                 kept = _writer(result, reason)
+            except Exception as why:       # the line is said whatever happens, and why
+                kept = f"its record was not written: {' '.join(str(why).split())}"
         if err is None:
             from sewfmu.scenarios.cosim.fmi_calls import StepTimeout  # loaded with the run
             err = StepTimeout(f"{reason}; {kept}" if kept else reason)
@@ -314,12 +325,14 @@ def _finish(run, err: Interrupted | None, limit: float | None = None) -> None:
 
 def _interrupted(run, err: Interrupted) -> Interrupted:
     """err with where the run is and what it recorded."""
-    if _instead is not None:
-        err.result, err.where = _instead
-        return err
     inst, call = stuck_call()
     phase = getattr(run, "_phase", "loading")
     at = f" at t = {run.t:g} s" if phase in ("initialization", "step") else ""
+    if _instead is not None:
+        err.result, err.where = _instead
+        if inst:
+            err.where = f"while {inst} was in {call}{at}{_of_the_estimate()}"
+        return err
     if inst:
         err.where = f"while {inst} was in {call}{at}"
     else:

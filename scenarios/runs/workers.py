@@ -125,6 +125,8 @@ def _serve(conn, main_pid: int, life) -> None:
         if task is None:
             return
         func, args = task
+        global _doing
+        _doing = next((str(a.label) for a in args if hasattr(a, "label")), None)
         try:
             answer = ("ok", func(*args))
         except Exception as err:          # the task's own failure, reported as such
@@ -138,10 +140,15 @@ def _end_stuck(conn, err: BaseException) -> None:
     """The watchdog's way out of a point stuck in an FMU call: a step beyond step_timeout is the
     point's failure, told to the main process (which takes a fresh worker); an interruption is
     the main process ending this worker, and told nothing. The worker ends at once."""
-    if not isinstance(err, Interrupted):
-        with contextlib.suppress(Exception):
+    with contextlib.suppress(Exception):
+        if not isinstance(err, Interrupted):
             conn.send(("died", " ".join(str(err).split())))
+        elif err.where:                  # where the point was stuck, for the sweep's line
+            conn.send(("stopped", f"{err.where}{f' (point {_doing})' if _doing else ''}"))
     os._exit(err.exit_status if isinstance(err, Interrupted) else 1)
+
+
+_doing: str | None = None      # the label of the point this worker runs (a sweep's), if any
 
 
 def describe_exit(exitcode: int | None) -> str:
@@ -191,23 +198,30 @@ class _Worker:
         stop_all([self])
 
 
-def stop_all(workers: list[_Worker], wait_for: float = STOP_WAIT) -> None:
+def stop_all(workers: list[_Worker], wait_for: float = STOP_WAIT) -> list[str]:
     """End the workers: SIGTERM to all at once, SIGKILL to those still alive `wait_for` seconds
-    later (one in an FMU call that never returns), so that they all end within that time."""
+    later (one in an FMU call that never returns), so that they all end within that time.
+    Returns where those stuck in an FMU call were (their watchdog's word)."""
     for worker in workers:
-        with contextlib.suppress(OSError, ValueError):
-            worker.conn.close()
         if worker.process.is_alive():
             worker.process.terminate()
     deadline = time.monotonic() + wait_for
     for worker in workers:
         worker.process.join(max(0.0, deadline - time.monotonic()))
+    stuck = []
     for worker in workers:
         if worker.process.is_alive():
             worker.process.kill()
             worker.process.join(wait_for)
-        with contextlib.suppress(OSError, ValueError):
-            worker.life.close()          # (the kernel's SIGKILL to a worker still there)
+        with contextlib.suppress(Exception):      # what it said before it ended
+            while worker.conn.poll():
+                said = worker.conn.recv()
+                if said[0] == "stopped":
+                    stuck.append(said[1])
+        for end in (worker.conn, worker.life):    # (life: the kernel's SIGKILL to one left)
+            with contextlib.suppress(OSError, ValueError):
+                end.close()
+    return stuck
 
 
 class WorkerPool:
@@ -254,13 +268,19 @@ class WorkerPool:
                     if queue:
                         worker.give(queue.popleft())
                     yield key, answer
-        except BaseException:                        # Ctrl-C, or the caller gave up
-            self.close()
+        except BaseException as err:                 # Ctrl-C, or the caller gave up
+            stuck = self.close()
+            if isinstance(err, Interrupted) and stuck and not err.where:
+                more = len(stuck) - 1
+                err.where = stuck[0] + (f", and {more} other point{'s' * (more > 1)} stuck"
+                                        if more else "")
             raise
 
-    def close(self) -> None:
-        stop_all(self.workers)          # all at once: each may be stuck in an FMU call
+    def close(self) -> list[str]:
+        """Stop every worker; where those stuck in an FMU call were."""
+        stuck = stop_all(self.workers)          # all at once: each may be stuck in an FMU call
         self.workers = []
+        return stuck
 
 
 def run_tasks(tasks: Iterable[tuple[object, Callable, tuple]], workers: int,

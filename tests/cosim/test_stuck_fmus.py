@@ -305,8 +305,11 @@ def test_a_signal_ends_a_sweep_whose_workers_are_stuck_leaving_no_process(tmp_pa
     err, took = _signal_and_wait(proc, signal.SIGINT)
     assert proc.returncode == 130, err
     assert took < WITHIN, took
-    assert err.splitlines() == ["sewfmu: interrupted (SIGINT); the points finished so far are "
-                                "kept: the same command resumes"]
+    # the stuck points' words, passed up by their workers: instance, call, time, point
+    lines = [f"sewfmu: interrupted (SIGINT) while motor was in doStep at t = {a:g} s (point "
+             f"motor.hang_at={a:g}), and 1 other point stuck; the points finished so far are "
+             f"kept: the same command resumes" for a in (0.01, 0.02)]
+    assert len(err.splitlines()) == 1 and err.splitlines()[0] in lines, err
     deadline = time.monotonic() + WITHIN
     while processes_in("session", proc.pid) and time.monotonic() < deadline:
         time.sleep(0.05)
