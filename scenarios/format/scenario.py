@@ -181,13 +181,15 @@ class Scenario:
         info = {i.name: i for i in parameter_info(params_class)}.get(err.name)
         value = self.instances[inst].parameters.get(err.name)
         target = f"{inst}.{err.name}"
-        if info is not None and isinstance(value, (int, float)) and math.isfinite(value):
+        # the range's refusal only ("must be within"; a sign the model refuses says so itself)
+        if info is not None and isinstance(value, (int, float)) and math.isfinite(value) \
+                and "must be within" in str(err):
             low, high = info.bounds
             if (low is not None and value < low) or (high is not None and value > high):
                 return out_of_range(self.origin_of(target), target, value, info.unit, low, high,
                                     f"{inst} ({self.instances[inst].fmu}) declares",
                                     self.with_unit(target))
-        return f"{self.origin_of(target)} {inst}: {err}"
+        return f"{self.origin_of(target)} {target}: {err}"
 
     def even_steps(self) -> tuple[int, float]:
         """The run as whole, even communication steps: (n, h) with n·h the end time and h the
