@@ -12,7 +12,7 @@ from typing import Any
 
 from sewfmu.components.parameters import did_you_mean
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
-from sewfmu.scenarios.format.declared_units import parameter_units
+from sewfmu.scenarios.format.declared_units import parameter_bounds, parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.fmu_file import declared_bounds, model_description
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
@@ -280,6 +280,26 @@ class Scenario:
             value = self._snapped(inst, key, value)      # "400 grad": 2π, one rounding above
         self.instances[inst].parameters[key] = value
         self.given[target] = (origin, text)
+
+    def refuse_converted_beyond_range(self) -> None:
+        """A value of sewfmu's FMUs given with a unit that converts beyond the declared range,
+        refused as given ("19098.6 rpm"): for a caller that hands the numbers on and so would
+        lose the unit the refusal must not offer (a sweep's points)."""
+        from sewfmu.scenarios.format.declared_range import out_of_range  # only with a unit
+
+        for target, (origin, text) in self.given.items():
+            inst, _, key = target.partition(".")
+            if text is None or inst not in self.instances or \
+                    self.instances[inst].fmu not in FMUS or self.instances[inst].fmu in self.fmu_files:
+                continue
+            value = self.instances[inst].parameters.get(key)
+            low, high = parameter_bounds(self.instances[inst].fmu).get(key, (None, None))
+            if isinstance(value, (int, float)) and ((low is not None and value < low)
+                                                    or (high is not None and value > high)):
+                raise ScenarioError(out_of_range(
+                    self.origin_of(target), target, value, parameter_units(
+                        self.instances[inst].fmu).get(key, ""), low, high,
+                    f"{inst} ({self.instances[inst].fmu}) declares", text))
 
     def _snapped(self, inst: str, key: str, value: float) -> float:
         """A value converted from its unit, the declared bound it lies within a rounding of

@@ -196,6 +196,7 @@ def points_of(scenario: Scenario, extra_grid: dict[str, list] | None = None) -> 
         probe = scenario.copy()
         for target, value in point.values:
             probe.set_value(target, value, origin=swept_from(scenario, target))
+        probe.refuse_converted_beyond_range()   # as given, while its unit is known
         # "30 N/mm" and 30000 are one value: the table, the plots and the folders hold the
         # number in the declared unit, as the run used it
         numeric.append(Point(point.index, tuple((target, _as_used(probe, target, value))

@@ -125,6 +125,9 @@ def test_a_value_beyond_a_bound_shows_the_digits_that_differ_and_no_unit_for_one
         sewfmu.check("punch_drive", set={"linkage.angle_BO2C": math.nextafter(2 * math.pi, 7)})
     assert f"{math.nextafter(2 * math.pi, 7)!r} rad is outside the range [0, " \
            f"{2 * math.pi!r}]" in str(ulp.value)
+    with pytest.raises(sewfmu.ScenarioError) as swept:      # a sweep's points too
+        sewfmu.sweep("punch_drive", grid={"shaft.omega0": "100, 19098.6 rpm"})
+    assert "meant in" not in str(swept.value) and "given as '19098.6 rpm'" in str(swept.value)
     with pytest.raises(sewfmu.Error) as run:     # the run's own check of the shaft, too
         sewfmu.run("punch_drive", set={"shaft.omega0": "19098.6 rpm"})
     assert "meant in" not in str(run.value) and "2000.000715" in str(run.value)
