@@ -130,6 +130,8 @@ def deferred():
         yield                    # signal handlers belong to the main thread
         return
     raise_pending()              # one received before, and lost where it was raised
+    global under_way
+    under_way = None             # a new run: an interruption before it was answered
     previous = {s: signal.getsignal(s) for s in SIGNALS}
     mine = {s: _mark for s in SIGNALS if previous[s] is not signal.SIG_IGN}   # ignored stays so
     _installed.append({"mine": mine, "replaced": previous})
