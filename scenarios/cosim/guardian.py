@@ -76,12 +76,15 @@ class Board:
         return name, CALLS[call] if call < len(CALLS) else CALLS[0]
 
 
-def _line(board: Board, signum: int | None, limit: float | None, own: bool) -> str:
-    """The one line of a run the guardian ends."""
+def _line(board: Board, signum: int | None, limit: float | None, own: bool,
+          end: bool = True) -> str:
+    """The one line of a run the guardian ends (or, not `end`, tells a user's process of)."""
     inst, call = board.where()
     t = board.d[T]
     lost = ("its code holds Python's interpreter lock, so nothing in that process can answer: "
-            "sewfmu killed it (SIGKILL) and the record so far is lost")
+            "sewfmu killed it (SIGKILL) and the record so far is lost") if end else \
+        ("its code holds Python's interpreter lock, so nothing in this process can answer; "
+         "another Ctrl-C ends it (SIGKILL: the record so far is lost)")
     who = inst or "an FMU"
     if signum is not None:
         name = signal.Signals(signum).name
@@ -175,9 +178,7 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
 
 def _kill(target: int, board: Board, signum, limit, mode: str, conn, child, end: bool) -> int:
     """Say the line (or hand it to the sweep), and with `end` kill the process."""
-    line = _line(board, signum, limit, mode != "worker")
-    if mode == "api" and not end:
-        line += "; another Ctrl-C ends this process"
+    line = _line(board, signum, limit, mode != "worker", end)
     if mode == "worker":
         if signum is None and conn is not None:          # the point's failure, to the sweep
             import pickle  # only for this message

@@ -8,6 +8,7 @@ import os
 import shutil
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -176,3 +177,46 @@ def test_a_sweep_point_hanging_in_initialization_fails_and_the_others_go_on(tmp_
             "exitInitializationMode at t = 0 s") in printed
     rows = (out / "sweep.csv").read_text().splitlines()
     assert len(rows) == 3 and ",ok," in rows[2]
+
+
+def test_a_sweep_point_holding_the_lock_beyond_step_timeout_fails_and_the_others_go_on(
+        tmp_path, fmus):
+    """The worker's guardian tells the sweep the point's failure (no thread of the worker can)."""
+    out = tmp_path / "sweep"
+    proc, _ = _start(tmp_path, "sweep", str(_scenario(tmp_path, fmus, mode=2)), "--grid",
+                     "motor.hang_at=0.01,5", "--workers", "2", "--quiet", "--out", str(out),
+                     "--set", "experiment.step_timeout=0.3")
+    try:
+        printed, err = proc.communicate(timeout=120)
+    finally:
+        with_kill(proc)
+    assert proc.returncode == 0, err
+    assert ("failed: motor.hang_at=0.01: motor took longer than experiment.step_timeout = "
+            f"0.3 s in doStep at t = 0.01 s; {LOST}") in printed, printed
+    rows = (out / "sweep.csv").read_text().splitlines()
+    assert len(rows) == 3 and ",ok," in rows[2]
+
+
+def test_a_users_script_is_told_at_the_first_ctrl_c_and_ended_at_the_second(tmp_path, fmus):
+    script = tmp_path / "script.py"
+    script.write_text("import sewfmu, sys\n"
+                      f"sewfmu.run({str(_scenario(tmp_path, fmus, mode=2))!r})\n"
+                      "print('went on')\n")
+    marker = tmp_path / "hanging"
+    marker.mkdir()
+    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            cwd=tmp_path, env={**os.environ, "HANG_MARKER": str(marker)})
+    STARTED.append(proc)
+    _when_stuck(proc, marker)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(2.0)
+    assert proc.poll() is None                    # told, not ended
+    err, took = _signal_and_wait(proc, signal.SIGINT)
+    assert proc.returncode == -signal.SIGKILL, err
+    assert took < 0.5, took
+    where = f"sewfmu: interrupted (SIGINT) while motor was in doStep at t = {HANG_AT:g} s; "
+    assert err.splitlines() == [
+        where + "its code holds Python's interpreter lock, so nothing in this process can "
+                "answer; another Ctrl-C ends it (SIGKILL: the record so far is lost)",
+        where + LOST]
