@@ -97,7 +97,8 @@ def _workers_of(pid: int) -> list[int]:
             return b""
 
     children = _children(pid)
-    servers = [c for c in children.get(pid, []) if b"forkserver" in cmdline(c)]
+    # the sweep runs in a child of the `sewfmu` process, which guards it (cosim/guardian.py)
+    servers = [c for c in _descendants(pid) if b"forkserver" in cmdline(c)]
     return [w for s in servers for w in children.get(s, []) if _alive(w)]
 
 
