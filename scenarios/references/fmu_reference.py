@@ -180,7 +180,11 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
     from fmpy import simulate_fmu  # fmpy: only when an FMU file is read
 
-    from sewfmu.scenarios.cosim import interrupt, watchdog  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim import (  # loaded on first use (start-up time)
+        guardian,
+        interrupt,
+        watchdog,
+    )
     from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status  # loaded on first use (start-up time)
     from sewfmu.scenarios.cosim.instances import open_instance  # loaded on first use (start-up time)
 
@@ -196,6 +200,12 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
 
     def step_finished(time: float, recorder) -> bool:
         steps.t, steps.k = time, steps.k + 1
+        # where the run is, for the guardian of a process whose FMU holds the GIL
+        paper = watchdog.board()
+        if steps.k == 1:
+            paper.names(["reference"])
+        paper.q[guardian.BEAT] += 1
+        paper.q[guardian.WHERE], paper.d[guardian.T] = guardian.CODE["doStep"], time
         interrupt.raise_pending()
         return True
 
