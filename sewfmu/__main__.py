@@ -4,7 +4,7 @@ Until sewfmu.cli.main takes over (it turns SIGINT and SIGTERM into a clean stop 
 runs), a signal ends the process at once with one line: nothing has been run or written yet.
 The handlers are put in place as this module is imported by the console script (before the rest
 of its imports); what comes before it is Python's own start-up (the interpreter, site and the
-editable install's finder: about 45 ms on this project's machine), where no code of sewfmu's can
+editable install's finder: about 20 ms on this project's machine), where no code of sewfmu's can
 answer a signal (docs/running.md, Reliability).
 """
 import os
