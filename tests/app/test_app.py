@@ -95,6 +95,7 @@ def _wait(jobs, *ids, timeout=120):
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 def test_two_runs_at_once_each_give_the_figures_of_their_own_values(tmp_path):
     jobs = Jobs(tmp_path)
     try:
@@ -138,6 +139,7 @@ def test_cancel_ends_the_run_s_process_and_writes_nothing(tmp_path):
         jobs.shutdown()
 
 
+@pytest.mark.slow
 def test_no_more_jobs_than_the_app_runs_at_once(tmp_path, capfd):
     """A script posting Run in a loop must not start a process each time: beyond MAX_RUNNING
     running jobs, one line; a cancelled job frees its place, and ends without a traceback."""
@@ -228,6 +230,7 @@ def test_a_bad_port_is_one_line(port):
     assert len(done.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_a_port_in_use_is_one_line_and_exit_1():
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
@@ -247,6 +250,7 @@ def test_without_the_extra_the_command_says_how_to_install_it():
     assert len(line.splitlines()) == 1 and "pip install" in line and "[app]" in line
 
 
+@pytest.mark.slow
 def test_a_scenario_file_that_cannot_load_is_one_line(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("this is not toml [")
@@ -264,6 +268,7 @@ def test_sewfmu_app_is_callable_as_the_package_and_as_the_name():
         package(port="8050")
 
 
+@pytest.mark.slow
 def test_another_host_is_warned_of_and_sigterm_ends_the_server_with_0(tmp_path):
     import os
     import signal
@@ -300,6 +305,7 @@ def test_report_html_is_made_into_the_run_s_folder_when_asked_for(tmp_path):
         jobs.shutdown()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads Linux's /proc")
 def test_cancel_of_a_sweep_ends_its_workers_too(tmp_path):
     jobs = Jobs(tmp_path)
@@ -405,6 +411,7 @@ def test_the_spare_s_warm_up_of_a_study_or_a_bad_file_is_left_to_the_job(tmp_pat
         jobs.shutdown()
 
 
+@pytest.mark.slow
 def test_a_study_on_the_page_gives_its_figures_and_study_json(tmp_path):
     """The catalogue's studies are on the page too: computed (no series, no drawing), their key
     figures those of sewfmu.run with the same value, study.json served beside summary.json."""

@@ -102,6 +102,7 @@ def _malformed(run: dict) -> dict[str, bytes]:
             "a value nested too deeply": _valued(run, "[" * MAX_DEPTH + "]" * MAX_DEPTH)}
 
 
+@pytest.mark.slow
 def test_the_page_s_own_requests_pass(page):
     client, dependencies, _ = page
     for dep in dependencies:

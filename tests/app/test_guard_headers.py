@@ -132,6 +132,7 @@ HEADER_TEXT = st.one_of(st.sampled_from(["²", "³", "٣", "+1", "-1", " 1", "9"
                         st.from_regex(r"https?://[a-z0-9.:\[\]²٣+ -]{0,30}", fullmatch=True))
 
 
+@pytest.mark.slow
 @given(host=HEADER_TEXT, origin=st.none() | HEADER_TEXT, referer=st.none() | HEADER_TEXT,
        length=HEADER_TEXT, encoding=st.none() | HEADER_TEXT,
        method=st.sampled_from(["GET", "POST", "PUT", "HEAD"]))

@@ -151,6 +151,7 @@ def test_the_server_s_own_names_are_answered(server, host):
     assert headers["X-Content-Type-Options"] == "nosniff"
 
 
+@pytest.mark.slow
 def test_a_run_from_another_site_starts_nothing_and_its_files_stay_the_page_s(server,
                                                                               dependencies):
     body = _run_body(dependencies, {"experiment.revolutions": "1"})
@@ -253,6 +254,7 @@ def test_a_chunked_body_is_refused_unread(server, data):
     assert after - before < 50 and peak_after - peak_before < 50
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text", ["1" * 5000, "10 degC"])
 def test_a_value_it_cannot_read_is_the_alert_over_http(server, dependencies, text):
     status, _, answer = server.request(

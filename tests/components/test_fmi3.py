@@ -56,6 +56,7 @@ def test_both_versions_declare_the_same_variables_structure_and_experiment(fmu_p
             cs.canHandleVariableCommunicationStepSize) == (False, True, True, True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(FMUS))
 def test_every_fmi3_fmu_matches_the_regression_reference(fmu3_paths, name):
     assert references.check(name, fmu3_paths[name]) == []
@@ -81,6 +82,7 @@ def test_every_catalogue_run_gives_the_same_numbers_with_fmi3(scenario, fmu_dir)
     assert fmi3.coupling == fmi2.coupling            # the adaptive master's steps included
 
 
+@pytest.mark.slow
 def test_an_fmi3_system_exported_to_ssp_runs_from_the_file(tmp_path, fmu_dir):
     scenario = load("punch_split")
     scenario.set_value("experiment.fmi", 3)
@@ -137,6 +139,7 @@ print(sorted(m for m in sys.modules if m.startswith("sewfmu") and "MainShaft" in
 """
 
 
+@pytest.mark.slow
 def test_both_versions_of_an_fmu_run_side_by_side_each_its_own_code(fmu_paths, fmu3_paths,
                                                                     tmp_path):
     """The FMI 2.0 and 3.0 FMUs of one model, code of one hash, loaded into one process: each
@@ -154,6 +157,7 @@ def test_both_versions_of_an_fmu_run_side_by_side_each_its_own_code(fmu_paths, f
     assert len(scripts) == 2 and {s.split("_")[0] for s in scripts} == {"sewfmu", "sewfmu3"}
 
 
+@pytest.mark.slow
 def test_sewfmu_build_fmi3_writes_into_the_fmi3_folder(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "sewfmu", "build", "--fmi", "3",
                            "--dest", str(tmp_path)], capture_output=True, text=True,

@@ -216,6 +216,7 @@ def _run_alone(tmp_path, fmu_path, spec):
     return result["out"]
 
 
+@pytest.mark.slow
 def test_each_fmu_runs_from_its_file_alone_in_a_fresh_process(fmu_paths, tmp_path):
     out = _run_alone(tmp_path, fmu_paths["MainShaft"],
                      {"set": {"omega0": 40.0}, "steps": 10, "h": 0.01, "get": ["phi"]})
@@ -286,6 +287,7 @@ def test_a_run_leaves_the_host_path_alone_and_builds_still_carry_binaries(fmu_pa
     assert "binaries/linux64/MainShaft.so" in zipfile.ZipFile(path).namelist()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmi, binary", [(2, "binaries/linux64/MainShaft.so"),
                                          (3, "binaries/x86_64-linux/MainShaft.so")])
 def test_building_after_running_in_a_fresh_process_still_carries_binaries(fmu_dir, fmu3_dir,

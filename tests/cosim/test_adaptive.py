@@ -34,6 +34,7 @@ def test_the_adaptive_master_reaches_the_monolithic_accuracy_target(fmu_paths):
     assert figures["master_rejected_steps"] > 0
 
 
+@pytest.mark.slow
 def test_a_tighter_tolerance_gives_smaller_errors(fmu_paths):
     tight, _ = monolithic_summary(load("punch_drive"))
     errors = []
@@ -65,6 +66,7 @@ def test_a_rejected_step_is_rolled_back_bit_for_bit(fmu_paths):
 
 
 # within: just above the difference measured, 0.0048° and 0.030 mm
+@pytest.mark.slow
 @pytest.mark.parametrize("name, figure, within", [("feed", "phi5_swing_deg", 0.006),
                                                   ("takeup", "stroke_mm", 0.035)])
 def test_the_adaptive_master_runs_the_one_way_scenarios(fmu_paths, name, figure, within):

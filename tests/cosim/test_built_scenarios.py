@@ -24,6 +24,7 @@ def test_a_scenario_name_that_is_no_file_name_is_refused_where_it_is_set(name):
         Scenario(**{**fields, "name": name})
 
 
+@pytest.mark.slow
 def test_a_name_forced_past_the_check_writes_nothing_outside_out(tmp_path):
     victim = tmp_path / "victim"
     (victim / "sub").mkdir(parents=True)

@@ -136,6 +136,7 @@ def _entries(cache: Path) -> list[str]:
 
 
 # --- the cache owns what it made, and nothing else ---------------------------------------------
+@pytest.mark.slow
 def test_a_users_folder_as_the_cache_keeps_every_file(fmu_dir, tmp_path):
     home = _users_folder(tmp_path)
     before = _snapshot(home)
@@ -234,6 +235,7 @@ def _code_as_a_link(fmu: Path):
     code.symlink_to(copy)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", [_delete_library, _truncate_code, _change_code_keeping_its_size,
                                     _shadow_a_module, _code_as_a_link])
 def test_a_damaged_or_changed_entry_is_extracted_again(fmu_paths, tmp_path, damage):
@@ -355,6 +357,7 @@ def test_what_an_archive_may_not_hold(tmp_path, members, modes, said):
 
 
 # --- killed extractions --------------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_run_killed_mid_extraction_leaves_scratch_the_next_run_removes(fmu_paths, tmp_path,
                                                                           monkeypatch):
     cache = tmp_path / "cache"
@@ -377,6 +380,7 @@ def test_a_run_killed_mid_extraction_leaves_scratch_the_next_run_removes(fmu_pat
     assert [e for e in _entries(cache) if e.startswith(".")] == [".sewfmu-lock"]
 
 
+@pytest.mark.slow
 def test_a_run_without_a_cache_killed_mid_extraction_is_cleaned_up_by_the_next(fmu_paths,
                                                                               tmp_path):
     tmp = tmp_path / "tmp"
@@ -404,6 +408,7 @@ def test_scratch_of_another_host_goes_only_when_old(tmp_path):
     assert [p.name for p in removed] == [".x.oldhost.sewfmu-1.partial"]
 
 
+@pytest.mark.slow
 def test_concurrent_runs_share_one_extraction_with_its_bytecode(fmu_paths, tmp_path):
     cache = tmp_path / "cache"
     runs = [_started(fmu_paths["MainShaft"], cache) for _ in range(4)]     # all at once

@@ -104,6 +104,7 @@ def test_a_hang_in_the_estimates_coarser_run_says_so_and_keeps_the_finished_reco
     _closed_form(finished, 6)
 
 
+@pytest.mark.slow
 def test_a_users_own_sigint_handler_is_called_between_two_steps_and_the_run_goes_on():
     heard = []
     before = signal.signal(signal.SIGINT, lambda signum, frame: heard.append(signum))

@@ -102,6 +102,7 @@ def test_a_snapshot_comes_back_only_in_its_own_open_run():
         assert b.k == 5
 
 
+@pytest.mark.slow
 def test_a_restore_after_the_fmus_are_freed_is_refused_not_a_crash(fmu_paths):
     script = """
         import sewfmu
@@ -164,6 +165,7 @@ def test_after_a_failed_step_the_run_goes_on_only_from_a_state_saved_before():
         assert master.k == 5
 
 
+@pytest.mark.slow
 def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_paths):
     # the stepping thread called an FMU instance the closing thread had freed: SIGSEGV
     script = """
@@ -192,6 +194,7 @@ def test_closing_from_another_thread_stops_the_stepping_between_two_steps(fmu_pa
     assert "the run is not open" in out and "True" in out
 
 
+@pytest.mark.slow
 def test_closing_or_opening_from_two_threads_at_any_moment_neither_crashes_nor_leaks(fmu_paths):
     # close() while the other thread was still opening freed what the opening then stepped
     # (SIGSEGV); two threads opening at once both "opened", the first run's instances leaked

@@ -20,6 +20,7 @@ def _narrow(tmp_path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_a_narrowed_record_plots_what_is_there_and_names_what_is_missing(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "sewfmu", "run", str(_narrow(tmp_path)),
                            "--plot", "--animate", "--report", "--out", str(tmp_path / "o")],

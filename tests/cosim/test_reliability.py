@@ -138,6 +138,7 @@ def test_master_rolls_back_a_stretch_of_steps_bit_for_bit(fmu_paths, scenario, o
         assert np.array_equal(first[name], second[name]), name
 
 
+@pytest.mark.slow
 def test_every_fmu_state_survives_serialization(fmu_paths):
     """Serialize each FMU's state to bytes, run on, restore from the bytes: the same steps."""
     for scenario, overrides in (("punch_drive", {}), ("punch_drive", ON_STOP),

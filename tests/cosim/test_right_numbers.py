@@ -41,6 +41,7 @@ def _closed_form_static(a_base: float) -> tuple[float, float]:
     return -at_a * a_base, -tip * a_base
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("step", [1e-3, 1e-4])
 @pytest.mark.parametrize("every_step", [True, False], ids=["set-every-step", "set-once"])
 def test_a_host_that_never_sets_the_rate_gets_the_static_deflection(fmus, step, every_step):
@@ -221,6 +222,7 @@ def test_an_input_left_unconnected_is_named(fmu_paths, tmp_path):
         run(sc, fmu_paths)
 
 
+@pytest.mark.slow
 def test_an_input_given_a_value_runs_held_there(fmu_paths, tmp_path):
     sc = load(_without("linkage.xi_ddot -> punch.xi_ddot", tmp_path))
     sc.set_value("punch.xi_ddot", 0.0)
@@ -333,6 +335,7 @@ def test_an_instance_name_that_is_a_path_is_refused(tmp_path, name):
         load(str(path))
 
 
+@pytest.mark.slow
 def test_compare_variants_with_slashes_stay_inside_the_output_folder(fmu_paths, tmp_path):
     sc = load("punch_drive")
     sc.revolutions = 1
@@ -421,6 +424,7 @@ def test_runs_too_large_to_record_are_refused_up_front(fmu_paths, step, said):
         run(sc, fmu_paths)
 
 
+@pytest.mark.slow
 def test_record_every_does_not_change_the_key_figures(fmu_paths):
     sc = load("punch_drive")
     every = summarize(run(sc, fmu_paths))

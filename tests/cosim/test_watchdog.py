@@ -155,6 +155,7 @@ def test_the_call_a_run_is_in_is_named_from_the_main_threads_stack(call, named):
     assert watchdog.stuck_call() == (None, None)          # here: in no FMU call
 
 
+@pytest.mark.slow
 def test_a_process_not_sewfmus_own_is_told_where_the_run_is_stuck_and_not_ended(capfd):
     watchdog.end_process_with(None)         # the API in a user's script: no hook
     model = Blocking(at=0.2)

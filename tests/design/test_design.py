@@ -114,6 +114,7 @@ def test_the_api_refuses_what_the_command_line_refuses():
 
 
 # --- what runs: fast, a few short runs each ---------------------------------------------------
+@pytest.mark.slow
 def test_a_target_is_met_and_a_study_run_again_resumes(tmp_path):
     out = tmp_path / "preload"
     found = sewfmu.optimize("punch_drive", vary={"punch.F10": "15..40 N"},
@@ -162,6 +163,7 @@ def test_an_infeasible_point_is_recorded_with_its_reason_not_a_number(tmp_path):
     assert "cannot be assembled" in first["error"]
 
 
+@pytest.mark.slow
 def test_a_fit_recovers_a_parameter_from_its_own_trace(tmp_path):
     _force_trace(tmp_path / "trace.csv", **{"punch.b2": 70.0})
     fit = sewfmu.fit("punch_drive", data=tmp_path / "trace.csv", free={"punch.b2": "20..300"},
@@ -174,6 +176,7 @@ def test_a_fit_recovers_a_parameter_from_its_own_trace(tmp_path):
     assert (tmp_path / "fit" / "fit.png").exists()
 
 
+@pytest.mark.slow
 def test_a_sensitivity_runs_its_samples_as_a_sweep(tmp_path):
     s = sewfmu.sensitivity("punch_drive", vary={"punch.F10": "15..40 N", "shaft.omega0":
                                                 "900..1100 rpm"},

@@ -28,6 +28,7 @@ def _trace(path: Path, **parameters) -> None:
                                  *zip(r.series["time"].tolist(), r.series["punch.F2"].tolist())])
 
 
+@pytest.mark.slow
 def test_a_fit_run_again_resumes_from_its_record(tmp_path):
     _trace(tmp_path / "trace.csv", **{"punch.b2": 70.0})
     out = tmp_path / "fit"
@@ -53,6 +54,7 @@ def test_a_fit_run_again_resumes_from_its_record(tmp_path):
     assert resumed.summary["computed"] == first.evaluations - 3   # the optimum among them
 
 
+@pytest.mark.slow
 def test_a_fit_to_other_data_sets_the_old_record_aside(tmp_path):
     _trace(tmp_path / "a.csv", **{"punch.b2": 70.0})
     _trace(tmp_path / "b.csv", **{"punch.b2": 90.0})

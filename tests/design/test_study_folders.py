@@ -125,6 +125,7 @@ def test_a_second_study_replaces_what_the_first_wrote_and_nothing_else(tmp_path)
     assert (out / "notes.txt").read_bytes() == b"mine\n"
 
 
+@pytest.mark.slow
 def test_a_killed_studys_record_is_its_own_to_the_next(tmp_path, monkeypatch):
     """The record is listed before the first run: a study stopped after it began leaves a record
     the next study resumes from, not one it refuses as the user's."""

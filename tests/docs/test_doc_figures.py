@@ -78,6 +78,7 @@ def test_every_within_in_the_docs_is_checked():
     assert used == set(elsewhere), ("named as checked elsewhere, found nowhere", set(elsewhere) - used)
 
 
+@pytest.mark.slow
 def test_the_figures_of_the_readme_hold(figures):
     failures = doc_figures.check(figures, files=["README.md"])
     assert not failures, "\n".join(failures)

@@ -43,6 +43,7 @@ def test_links_and_pictures_resolve():
             assert (doc.parent / target).exists(), (doc.name, target)
 
 
+@pytest.mark.slow
 def test_no_file_points_outside_the_repository():
     # the team's specification folder beside the repository, named without writing its path
     # here (this file would otherwise point there itself)
@@ -59,6 +60,7 @@ def python_blocks(page: Path) -> list[str]:
     return re.findall(r"^```python\n(.*?)^```", page.read_text(encoding="utf-8"), re.M | re.S)
 
 
+@pytest.mark.slow
 def test_every_example_of_the_api_page_runs(tmp_path, monkeypatch, fmu_paths):
     """docs/api.md as a user reads it: its examples, in order, in one namespace, in an empty
     folder; each checks what it claims (asserts in the examples)."""

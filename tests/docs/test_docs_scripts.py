@@ -37,12 +37,14 @@ def _check(proc: subprocess.CompletedProcess, what: str) -> None:
     assert "Traceback" not in proc.stderr, proc.stderr[-4000:]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stdin", [False, True], ids=["python try.py", "python - < try.py"])
 def test_the_readme_example_runs_as_a_script(tmp_path, fmu_dir, stdin):
     (block,) = _blocks("README.md")
     _check(_run(block, tmp_path, fmu_dir, stdin), "README.md's example")
 
 
+@pytest.mark.slow
 def test_the_api_page_runs_as_one_script(tmp_path, fmu_dir):
     """docs/api.md's examples in order, as one script (each uses what the earlier defined)."""
     blocks = _blocks("docs/api.md")

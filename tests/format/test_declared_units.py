@@ -55,6 +55,7 @@ def test_without_a_cache_the_classes_are_read(tmp_path, monkeypatch):
     assert not any(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_with_the_table_a_scenario_is_checked_without_the_slave_classes(cache, monkeypatch):
     declared_units.parameter_units("MainShaft")              # the table is there
     probe = ("import sys\nfrom sewfmu.scenarios.format.loader import load\n"
@@ -69,6 +70,7 @@ def test_with_the_table_a_scenario_is_checked_without_the_slave_classes(cache, m
     assert loaded == "[]"
 
 
+@pytest.mark.slow
 def test_a_changed_unit_in_the_table_gives_no_wrong_run(cache, tmp_path):
     """From the attack: omega0's unit changed to rev/s in the table by hand; "955 rpm" must still
     reach the FMU as 100.007 rad/s (a run in a new process, reading the table)."""

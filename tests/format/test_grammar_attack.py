@@ -56,6 +56,7 @@ def test_what_toml_alone_reads_is_refused_by_the_command_line_and_the_api_alike(
         assert says in line and "\n" not in line, line
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(st.one_of(st.text(max_size=30), st.builds(
     lambda sign, digits, tail: sign + digits + tail, st.sampled_from(["", "-", "+"]),

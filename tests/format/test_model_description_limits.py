@@ -44,6 +44,7 @@ def test_an_fmi_1_fmu_is_named_as_such(tmp_path, capsys):
         model_description(without, "")
 
 
+@pytest.mark.slow
 def test_a_root_element_with_a_60_mib_attribute_is_refused_at_once(tmp_path, capsys):
     big = "x" * (60 << 20)
     fmu = _fmu(tmp_path / "huge.fmu", FMI2.replace(
@@ -56,6 +57,7 @@ def test_a_root_element_with_a_60_mib_attribute_is_refused_at_once(tmp_path, cap
     assert took < 5, took                   # was silent after 120 s
 
 
+@pytest.mark.slow
 def test_a_model_description_beyond_the_bound_is_refused_naming_its_size(tmp_path):
     padded = FMI2.replace("?>", "?>" + "<!--" + " " * (MAX_XML_BYTES + 1) + "-->", 1)
     fmu = _fmu(tmp_path / "big.fmu", padded)

@@ -25,6 +25,7 @@ def _renamed(text: str, names: dict[str, str]) -> str:
     return text
 
 
+@pytest.mark.slow
 def test_a_catalogue_scenario_with_every_instance_renamed_gives_the_same_figures(tmp_path):
     path = tmp_path / "renamed.toml"
     path.write_text(_renamed(PUNCH, RENAMED), encoding="utf-8")

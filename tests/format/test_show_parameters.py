@@ -50,6 +50,7 @@ def _cli(*args):
                           text=True, timeout=120)
 
 
+@pytest.mark.slow
 def test_the_command_line_shows_a_component_and_tables():
     shown = _cli("show", "PunchContact")
     assert shown.returncode == 0, shown.stderr

@@ -93,6 +93,7 @@ def test_any_text_range_is_two_bounds_or_one_line(text):
         _one_line(err)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(TEXTS, TARGETS)
 def test_any_text_grid_reaches_its_points_or_one_line(scenario, text, target):

@@ -43,6 +43,7 @@ def _swept(scenario, target: str, values: list) -> list[float]:
     return [dict(p.values)[target] for p in points_of(scenario, {target: values})]
 
 
+@pytest.mark.slow
 @given(st.sampled_from(UNITS), st.lists(NUMBERS, min_size=1, max_size=5, unique=True))
 def test_a_unit_after_a_list_multiplies_every_value(scenario, case, values):
     target, unit, pints, si = case
@@ -68,6 +69,7 @@ def test_a_unit_after_a_range_applies_to_both_bounds(scenario, case, lo, hi):
                                 abs=1e-300)
 
 
+@pytest.mark.slow
 @given(st.lists(st.tuples(NUMBERS, st.sampled_from(UNITS[:2])), min_size=1, max_size=4,
                 unique_by=lambda vu: vu[0]))
 def test_every_value_may_keep_its_own_unit(scenario, pairs):

@@ -101,6 +101,7 @@ def test_static_response_to_a_constant_base_acceleration():
     assert np.allclose(model.static_deflection(5.0), U, rtol=1e-9, atol=1e-15)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("h", [4e-3, 1e-4])
 def test_exact_integrator_matches_scipy_at_coarse_and_fine_steps(h):
     """Physical coordinates, damping C = M·Φ·diag(2ζω)·Φᵀ·M, the same piecewise-linear input."""
@@ -156,6 +157,7 @@ def test_periodic_steady_state_matches_a_frequency_domain_solution():
     assert np.abs(U[1]).max() == pytest.approx(np.abs(U2).max(), rel=3e-4)    # measured: 2.0e-4
 
 
+@pytest.mark.slow
 def test_co_simulation_reaches_the_periodic_steady_state(fmu_paths):
     fig = summarize(run(load("carriage_startstop"), fmu_paths))
     model, drive = CarriageModal(), CarriageDrive()
@@ -165,6 +167,7 @@ def test_co_simulation_reaches_the_periodic_steady_state(fmu_paths):
     assert fig["peak_abs_U2_last_stitch_um"] == pytest.approx(np.abs(U[1]).max() * 1e6, rel=3e-3)
 
 
+@pytest.mark.slow
 def test_resonance_study():
     study = resonance_study()
     rates = np.array(study["stitch_rates_per_min"])

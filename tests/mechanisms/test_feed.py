@@ -24,6 +24,7 @@ def _dir(j, a, b):
     return np.arctan2(j[b].y - j[a].y, j[b].x - j[a].x)
 
 
+@pytest.mark.slow
 def test_every_link_length_is_kept_at_every_crank_angle():
     link = FeedLinkage()
     p = link.p
@@ -57,6 +58,7 @@ def test_velocities_match_finite_differences():
         assert np.allclose(getattr(m, name).rate, fd, rtol=1e-6, atol=1e-6), name
 
 
+@pytest.mark.slow
 def test_the_assembly_branch_is_continuous_over_a_revolution():
     link = FeedLinkage()
     j = sampled(link.motion, np.append(PHI1, 2 * np.pi)).joints
@@ -72,6 +74,7 @@ def test_the_assembly_branch_is_continuous_over_a_revolution():
     assert np.all(side("E", "H", "F") > 0)
 
 
+@pytest.mark.slow
 def test_default_swings_are_the_printed_ones():
     m = sampled(FeedLinkage().motion, PHI1)
     swing = lambda a: math.degrees(np.ptp(np.unwrap(a.value)))
@@ -79,6 +82,7 @@ def test_default_swings_are_the_printed_ones():
     assert swing(m.phi7) == pytest.approx(18.4, abs=0.05)
 
 
+@pytest.mark.slow
 def test_feed_scenario_figures(fmu_paths):
     fig = summarize(run(load("feed"), fmu_paths))
     m = sampled(FeedLinkage().motion, PHI1)
@@ -90,6 +94,7 @@ def test_feed_scenario_figures(fmu_paths):
     assert 0 < fig["min_transmission_angle_F_deg"] <= 90
 
 
+@pytest.mark.slow
 def test_ratio_study_reports_what_cannot_assemble_and_goes_on():
     study = ratio_study()
     amplitudes = [r["phi5_amplitude_deg"] for r in study["lever_ratio"]]

@@ -54,6 +54,7 @@ def _trajectory_error(fmu_paths, master, h, revolutions=3):
     return np.max(np.abs(result["punch.y"][:n] - mono.y[:n]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("master", ["jacobi", "gauss-seidel"])
 def test_error_shrinks_with_the_step_at_the_observed_order(fmu_paths, master):
     steps = [1e-3, 5e-4, 2.5e-4]
@@ -65,6 +66,7 @@ def test_error_shrinks_with_the_step_at_the_observed_order(fmu_paths, master):
     assert errors[-1] < 2e-8                  # 0.02 µm of punch height at 2.5e-4 s
 
 
+@pytest.mark.slow
 def test_punch_held_on_a_preloaded_stop_matches_the_monolithic_solution(fmu_paths):
     """Compression-only spring 11 with a 30 N preload: the punch rides on the stop for most of the
     revolution (the monolithic solution says how long), lands, leaves the stop and is picked up again. The
@@ -120,6 +122,7 @@ def test_cli_errors_are_one_clear_line(args, message, capsys, tmp_path, fmu_dir,
     assert not (tmp_path / "results.csv").exists()
 
 
+@pytest.mark.slow
 def test_summary_records_what_produced_it(fmu_dir, tmp_path, monkeypatch):
     """Two runs that differ in c3 have summaries that tell them apart: every parameter value used
     (defaults included, the scenario's own marked), the scenario file's hash, master, step,

@@ -51,6 +51,7 @@ def test_punch_split_gives_the_monolithic_figures_with_its_own_master(fmu_paths,
     assert all(err[key] < bound for key, bound in bounds.items()), err
 
 
+@pytest.mark.slow
 def test_punch_split_with_jacobi_at_the_default_step(fmu_paths):
     sc, result = _split(fmu_paths, master="jacobi")
     err = _errors(sc, result)
@@ -61,6 +62,7 @@ def test_punch_split_with_jacobi_at_the_default_step(fmu_paths):
 
 # angle: onset and loss, force: F2_weld_mean, just above what the code gives (measured: 0.0035°
 # and 0.059 N; 0.018° and 0.0039 N; 0.0042° and 0.0019 N)
+@pytest.mark.slow
 @pytest.mark.parametrize("settings, step, angle, force", [
     ({"shaft__omega0": 300.0}, 4e-5, 0.005, 0.07),       # the same crank angle per step as below
     ({"fabric__c2": 2.0e5}, 2.5e-4, 0.02, 0.005),        # a fabric four times as stiff
@@ -74,6 +76,7 @@ def test_punch_split_follows_the_monolithic_solution_elsewhere(fmu_paths, settin
     assert err["F2_weld_mean"] < force, err
 
 
+@pytest.mark.slow
 def test_the_iterative_master_converges_and_agrees(fmu_paths):
     sc, result = _split(fmu_paths, master="iterative")
     err = _errors(sc, result)
@@ -84,6 +87,7 @@ def test_the_iterative_master_converges_and_agrees(fmu_paths):
     assert len(warnings) == min(5, result.coupling["unconverged_steps"])
 
 
+@pytest.mark.slow
 def test_a_step_that_does_not_converge_is_reported(fmu_paths, monkeypatch):
     monkeypatch.setattr(coupling, "MAX_ITERATIONS", 1)
     sc, result = _split(fmu_paths, master="iterative")
@@ -91,6 +95,7 @@ def test_a_step_that_does_not_converge_is_reported(fmu_paths, monkeypatch):
     assert any("did not converge" in line and "residual" in line for line in result.log)
 
 
+@pytest.mark.slow
 def test_plain_jacobi_diverges_where_the_iterative_master_stays_stable(fmu_paths):
     with pytest.raises(Diverged, match="diverged"):           # the explicit coupling's limit
         _split(fmu_paths, master="jacobi", step=2e-3)
@@ -99,6 +104,7 @@ def test_plain_jacobi_diverges_where_the_iterative_master_stays_stable(fmu_paths
     assert _errors(sc, iterative)["F2_weld_mean"] < 0.15         # measured: 0.12 N
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("acceleration", ["aitken", "iqn-ils"])
 def test_accelerations_need_fewer_passes_than_the_plain_fixed_point(fmu_paths, acceleration):
     _, plain = _split(fmu_paths, master="iterative", step=1e-3, experiment__acceleration="none")

@@ -26,6 +26,7 @@ def test_the_studies_are_in_the_catalogue_and_show_their_parameters():
     assert next(r for r in table if r["parameter"] == "L_AB")["value"] == pytest.approx(0.0105)
 
 
+@pytest.mark.slow
 def test_the_take_up_stroke_of_a_design_set_by_set_agrees_with_its_co_simulation():
     study = sewfmu.run("takeup_tolerance", set={"takeup.L_AB": "10.5 mm"})
     assert study.series is None and study.study["links"]
@@ -59,6 +60,7 @@ def test_the_feed_ratios_follow_the_lever_set():
                                                                 abs=0.01)
 
 
+@pytest.mark.slow
 def test_a_study_on_the_command_line_takes_set_and_writes_its_files(tmp_path, capsys):
     out = tmp_path / "t"
     assert main(["run", "takeup_tolerance", "--set", "takeup.L_AB=10.5 mm", "--out", str(out),
@@ -70,6 +72,7 @@ def test_a_study_on_the_command_line_takes_set_and_writes_its_files(tmp_path, ca
     assert {"study.json", "summary.json", "takeup_tolerance.png"} <= {p.name for p in out.iterdir()}
 
 
+@pytest.mark.slow
 def test_a_study_refuses_what_it_cannot_do(tmp_path, capsys):
     assert main(["run", "feed_ratio", "--set", "feed.l44=0.01"]) == 1
     assert "did you mean 'l4'" in capsys.readouterr().err

@@ -102,6 +102,7 @@ def test_takeup_scenario_figures(fmu_paths):
     assert 0 < fig["central_difference_max_error_m_s"] < 1e-4 * fig["peak_speed_m_s"]
 
 
+@pytest.mark.slow
 def test_tolerance_study():
     study = tolerance_study()
     rows = {(r["parameter"], r["change_mm"]): r for r in study["links"]}

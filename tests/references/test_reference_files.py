@@ -285,6 +285,7 @@ def _sound(columns: dict, text_columns: list, inputs: bool = False) -> None:
     assert all(len(v) == len(times) for v in columns.values()) and len(columns) >= 2
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.one_of(st.binary(max_size=200), _CSV_TEXT.map(str.encode)), st.booleans())
 def test_any_bytes_give_a_csv_or_a_scenario_error(raw, inputs):
@@ -303,6 +304,7 @@ def test_any_bytes_give_options_or_a_scenario_error(raw):
         assert options.get("StepSize", 1) > 0 and 0 < options.get("RelTol", 0.5) < 1
 
 
+@pytest.mark.slow
 @settings(FUZZ, max_examples=max(150, settings.default.max_examples))    # files: slower
 @given(_CSV_TEXT, st.one_of(st.none(), _OPT_TEXT), st.one_of(st.none(), st.none(), _CSV_TEXT))
 def test_any_reference_folder_gives_a_reference_or_a_scenario_error(csv, opt, inputs):

@@ -74,6 +74,7 @@ else:
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("who", ["sewfmu", "matplotlib alone"])
 def test_a_fresh_process_that_draws_leaves_an_empty_home_empty(who, tmp_path):
     home = tmp_path / "home"
@@ -109,6 +110,7 @@ def test_sewfmu_run_with_plots_leaves_an_empty_home_empty(tmp_path, fmu_dir):
     assert sorted(home.rglob("*")) == []
 
 
+@pytest.mark.slow
 def test_only_the_one_module_loads_matplotlib_itself():
     """Every picture goes through matplotlib_home.pyplot(): a module that imported matplotlib
     or its pyplot itself could load it before MPLCONFIGDIR is set (a submodule, such as

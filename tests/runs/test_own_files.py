@@ -47,6 +47,7 @@ def test_a_sweep_leaves_a_users_record_or_table_alone(tmp_path, name, text):
     assert (tmp_path / name).read_text() == text
 
 
+@pytest.mark.slow
 def test_a_sweep_lists_its_own_files(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("mine\n")
     assert main(["sweep", "punch_drive", "--grid", "punch.F30=1,2", "--set",

@@ -52,6 +52,7 @@ def test_a_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
     assert table[2]["F2_weld_mean"]
 
 
+@pytest.mark.slow
 def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path):
     points = grid_points(GRID)
     run_sweep(_scenario(), points, tmp_path, workers=2, progress=False)

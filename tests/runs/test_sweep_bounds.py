@@ -133,6 +133,7 @@ def test_a_users_file_where_a_point_keeps_its_results_survives(tmp_path, capsys,
     assert mine.read_bytes() == b"my own results\n"
 
 
+@pytest.mark.slow
 def test_a_second_sweep_replaces_what_the_first_wrote_and_nothing_else(tmp_path):
     (tmp_path / "notes.txt").write_bytes(b"mine\n")
     grid = {"punch.F30": [1.0, 2.0]}
