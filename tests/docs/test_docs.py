@@ -61,21 +61,6 @@ def python_blocks(page: Path) -> list[str]:
 
 
 @pytest.mark.slow
-def test_every_example_of_the_api_page_runs(tmp_path, monkeypatch, fmu_paths):
-    """docs/api.md as a user reads it: its examples, in order, in one namespace, in an empty
-    folder; each checks what it claims (asserts in the examples)."""
-    blocks = python_blocks(REPO / "docs" / "api.md")
-    assert len(blocks) >= 6
-    monkeypatch.chdir(tmp_path)
-    namespace: dict = {}
-    for number, block in enumerate(blocks, 1):
-        try:
-            exec(compile(block, f"docs/api.md example {number}", "exec"), namespace)
-        except Exception as err:
-            raise AssertionError(f"docs/api.md example {number} fails: {err!r}\n{block}") from err
-
-
-@pytest.mark.slow
 def test_the_example_notebook_runs(tmp_path, fmu_paths):
     """examples/punch_drive.ipynb executed as Jupyter would (nbclient, a Python kernel), in an
     empty folder: a run, a sweep and their plots, with the checks in its last cell."""
