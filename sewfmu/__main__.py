@@ -33,7 +33,14 @@ def main(argv=None) -> int:
     _answer_from_now()
     from sewfmu.cli import main as command_line  # after the handlers: imports take a moment
 
-    return command_line(argv, guard=_stopped_while_starting)
+    try:
+        return command_line(argv, guard=_stopped_while_starting)
+    finally:
+        # the command is over (its line said): a signal now, a terminal's second Ctrl-C or the
+        # guarding process's copy of the first, would only kill the exit half-way (Python puts
+        # SIG_DFL back for its finalization; an ignored signal stays ignored)
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
 
 
 if __name__ == "__main__":

@@ -143,7 +143,9 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
                     os.write(relay, data)
             if signals and running:
                 if signum is None or not said:
-                    signum = signum or signals[0]          # the first signal decides
+                    # the first signal decides (of two read at once, SIGTERM: interrupt.py)
+                    signum = signum or (signal.SIGTERM if signal.SIGTERM in signals
+                                        else signals[0])
                     deadline = now + GRACE + MARGIN
                 elif mode == "api":                        # the second: now
                     return _kill(target, board, signum, None, mode, conn, child, True)

@@ -17,6 +17,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -27,6 +28,13 @@ _own = False                    # interrupt_on_signals() made SIGINT and SIGTERM
 # the signal of the interruption under way in sewfmu's own process: the first decides, and a
 # later one (a second Ctrl-C while the record is written) is not raised over it
 under_way: int | None = None
+_current: "Interrupted | None" = None   # the exception raised for it, and when
+_since = 0.0
+_marked_at: list[float] = []    # when each of `pending` came
+# s: two signals this close may have been sent in either order: both were pending together, and
+# the kernel delivers the lower number (SIGINT) first whatever the order they were sent in; then
+# SIGTERM, the request to end, decides (a supervisor's `kill -TERM; kill -INT` is 143)
+SAME_INSTANT = 0.05
 
 
 class Interrupted(KeyboardInterrupt):
@@ -60,7 +68,11 @@ def raise_pending() -> None:
     it go on); otherwise Interrupted."""
     if pending:
         signum = pending[0]
+        if signum == signal.SIGINT and signal.SIGTERM in pending and \
+                _marked_at[pending.index(signal.SIGTERM)] - _marked_at[0] < SAME_INSTANT:
+            signum = signal.SIGTERM
         pending.clear()
+        _marked_at.clear()
         if board is not None:                 # answered: the guardian need not step in
             board.q[4] = board.q[3]           # guardian.ANSWERED = RELAYED
         replaced = _installed[-1]["replaced"].get(signum) if _installed else None
@@ -72,21 +84,37 @@ def raise_pending() -> None:
 
 def _raising(signum: int):
     """Raise the interruption by `signum`; in sewfmu's own process it is the one under way."""
-    global under_way
+    global under_way, _current, _since
+    err = Interrupted(signum)
     if _own and under_way is None:
+        under_way, _current, _since = signum, err, time.monotonic()
+    raise err
+
+
+def _later(signum: int) -> None:
+    """A signal while an interruption is under way: it does not decide, unless it is a SIGTERM
+    at the same instant as the SIGINT under way (SAME_INSTANT)."""
+    global under_way
+    if signum == signal.SIGTERM and under_way == signal.SIGINT and _current is not None and \
+            time.monotonic() - _since < SAME_INSTANT:
         under_way = signum
-    raise Interrupted(signum)
+        _current.signum, _current.args = signum, (signal.Signals(signum).name,)
 
 
 def settled() -> None:
     """The interruption under way has been said (main() called by a process that goes on)."""
-    global under_way
+    global under_way, _current
     pending.clear()
-    under_way = None
+    _marked_at.clear()
+    under_way, _current = None, None
 
 
 def _mark(signum, frame) -> None:
+    if under_way is not None:
+        _later(signum)
+        return
     pending.append(signum)
+    _marked_at.append(time.monotonic())
 
 
 def _interrupt(signum, frame) -> None:
@@ -94,8 +122,10 @@ def _interrupt(signum, frame) -> None:
     # an import, a __del__: "Exception ignored in ...") it would be lost, and a run started next
     # would go on; deferred() raises it again
     if under_way is not None:        # one is being answered (its record written): it decides
+        _later(signum)
         return
     pending.append(signum)
+    _marked_at.append(time.monotonic())
     _raising(signum)
 
 
@@ -130,8 +160,8 @@ def deferred():
         yield                    # signal handlers belong to the main thread
         return
     raise_pending()              # one received before, and lost where it was raised
-    global under_way
-    under_way = None             # a new run: an interruption before it was answered
+    global under_way, _current
+    under_way, _current = None, None   # a new run: an interruption before it was answered
     previous = {s: signal.getsignal(s) for s in SIGNALS}
     mine = {s: _mark for s in SIGNALS if previous[s] is not signal.SIG_IGN}   # ignored stays so
     _installed.append({"mine": mine, "replaced": previous})

@@ -215,7 +215,9 @@ def _watch(read: int) -> None:
             continue
         try:
             if signals:
-                first = first_signal.get(run) or signals[0]   # the first signal decides
+                # the first signal decides (of two read at once, SIGTERM: interrupt.py)
+                first = first_signal.get(run) or (
+                    signal.SIGTERM if signal.SIGTERM in signals else signals[0])
                 first_signal[run] = first
                 if warned is run:                   # a second signal to a stuck run: now
                     _finish(run, Interrupted(first))

@@ -62,6 +62,28 @@ def test_the_first_of_two_signals_decides_and_the_second_is_not_raised_over_it()
     assert interrupt.under_way is None and interrupt.pending == []
 
 
+@pytest.mark.parametrize("apart, decides", [(0.0, signal.SIGTERM), (0.2, signal.SIGINT)])
+def test_of_sigint_and_sigterm_at_the_same_instant_sigterm_decides(apart, decides):
+    """Pending together, the kernel delivers SIGINT first whichever was sent first: within
+    SAME_INSTANT SIGTERM decides; later, the first does."""
+    before = {s: signal.getsignal(s) for s in interrupt.SIGNALS}
+    try:
+        interrupt.interrupt_on_signals()
+        with pytest.raises(interrupt.Interrupted) as caught:
+            os.kill(os.getpid(), signal.SIGINT)
+            _spin()
+        time.sleep(apart)
+        os.kill(os.getpid(), signal.SIGTERM)
+        _spin()
+        assert caught.value.signum == decides
+        assert caught.value.reason == f"interrupted ({signal.Signals(decides).name})"
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)
+        interrupt._own = False
+        interrupt.settled()
+
+
 class SlowInit(Integrator):
     """exitInitializationMode (the fake's pull of its inputs at initialization) blocks."""
 
