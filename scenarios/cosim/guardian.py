@@ -26,7 +26,6 @@ import os
 import select
 import signal
 import struct
-import subprocess
 import sys
 import time
 
@@ -274,13 +273,21 @@ def _forward(signum, frame) -> None:
         os.kill(_CHILD, signum)
 
 
-def spawn(board: Board, wake_r: int, relay_w: int, mode: str, conn: int | None = None):
-    """A guardian process beside this one (a sweep's worker, a user's script)."""
+def spawn(board: Board, wake_r: int, relay_w: int, mode: str, conn: int | None = None) -> int:
+    """A guardian process beside this one (a sweep's worker, a user's script); its pid. (No
+    Popen: nothing waits for it, and a Popen left running warns at the interpreter's exit.)"""
     fds = [wake_r, relay_w, board.fd] + ([conn] if conn is not None else [])
     args = [sys.executable, "-I", "-S", os.path.abspath(__file__), str(os.getpid()), mode,
             *(str(fd) for fd in fds)]
-    return subprocess.Popen(args, pass_fds=fds, stdin=subprocess.DEVNULL,
-                            start_new_session=False)
+    was = [os.get_inheritable(fd) for fd in fds]
+    try:
+        for fd in fds:
+            os.set_inheritable(fd, True)
+        return os.posix_spawn(sys.executable, args, os.environ, file_actions=[
+            (os.POSIX_SPAWN_OPEN, 0, os.devnull, os.O_RDONLY, 0)])
+    finally:
+        for fd, inheritable in zip(fds, was):
+            os.set_inheritable(fd, inheritable)
 
 
 def _main(argv: list[str]) -> None:
