@@ -32,7 +32,7 @@ _HOME = {**{name: "sewfmu.api" for name in ("run", "sweep", "compare", "load", "
          "CosimError": "sewfmu.scenarios.cosim.fmi_calls",
          "Diverged": "sewfmu.scenarios.cosim.divergence",
          # the design studies (docs/design.md)
-         **{name: "sewfmu.design_api" for name in ("optimize", "fit", "sensitivity")},
+         **{name: "sewfmu.api" for name in ("optimize", "fit", "sensitivity")},
          "app": "sewfmu.app"}             # the page (docs/app.md)
 
 

@@ -16,13 +16,20 @@ from __future__ import annotations
 
 import contextlib
 import tempfile
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from sewfmu.arguments import callback, flag, mapping, one_line, progress_of, reading, whole
+from sewfmu.arguments import (
+    callback,
+    flag,
+    mapping,
+    one_line,
+    progress_of,
+    reading,
+    workers_of,
+)
 from sewfmu.arguments import folder as _folder
-from sewfmu.errors import Error
+from sewfmu.results import InaccurateRun, Run, Sweep, SweepFailed, _run_of
 from sewfmu.scenarios.files.outputs import cannot_write, held, refuse_theirs
 from sewfmu.scenarios.format.built import checked_copy
 from sewfmu.scenarios.format.loader import catalogue as catalogue_files
@@ -30,10 +37,10 @@ from sewfmu.scenarios.format.loader import load as _load_scenario
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values
 from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain
-from sewfmu.scenarios.mechanisms.base import figures_of
 
 __all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "catalogue",
-           "read_value", "Run", "Sweep", "Scenario", "ScenarioError"]
+           "read_value", "optimize", "fit", "sensitivity", "Run", "Sweep", "Scenario",
+           "ScenarioError", "InaccurateRun", "SweepFailed"]
 
 
 def catalogue() -> list[str]:
@@ -129,80 +136,6 @@ def parameters(name: str | Path | Scenario, set: Mapping[str, Any] | None = None
     return scenario_rows(load(name, set))
 
 
-@dataclass
-class Run:
-    """One co-simulation: key figures, their units, the recorded time series.
-
-    summary: what summary.json holds (key figures, master, step, provenance...).
-    series: numpy structured array, a `time` field and one `instance.variable` field per
-    recorded output; units: the unit of every column and key figure ("" for none).
-    A study scenario (carriage_resonance, feed_ratio, takeup_tolerance) is computed, not
-    co-simulated: its headline figures are the key figures, `study` holds all of it (what
-    study.json holds) and there is no time series."""
-    name: str
-    summary: dict
-    series: Any
-    units: dict[str, str]
-    out: Path | None = None
-    runs: dict[str, "Run"] = field(default_factory=dict)    # [compare]: one Run per label
-    shaft: str | None = None                  # the MainShaft whose turns revolution() counts
-    study: dict | None = None                 # a study scenario's whole result
-    scenario: Scenario | None = field(default=None, repr=False)    # as run, values applied
-
-    def _recorded(self, what: str):
-        if self.series is None:
-            raise ScenarioError(f"{self.name} is a study, computed rather than co-simulated: "
-                                f"it has no time series for {what}; Run.study holds its result")
-        return self.series
-
-    @property
-    def figures(self) -> dict:
-        """The key figures alone (what `sewfmu run` prints)."""
-        return figures_of(self.summary)
-
-    @property
-    def provenance(self) -> dict:
-        return self.summary.get("provenance", {})
-
-    def to_pandas(self):
-        """The time series as a pandas DataFrame indexed by time (pandas must be installed)."""
-        return _frame(self._recorded("to_pandas()"), index="time")
-
-    def revolution(self, k: int = -1):
-        """The k-th whole revolution of the shaft (k=-1 the last): a structured array with
-        `crank_deg` in [0, 360), increasing (no wrap-around), and the recorded fields."""
-        from sewfmu.scenarios.runs.revolution import revolution  # numpy: not at `import sewfmu`
-
-        return revolution(self._recorded("revolution()"), f"{self.shaft or 'shaft'}.phi",
-                          whole(k, "revolution(k)"), self.name)
-
-    def mechanism(self, frames: int = 36) -> dict:
-        """The mechanism at `frames` equally spaced crank angles of the last revolution, as
-        numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
-        [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
-        point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
-        from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
-        from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
-
-        frames = whole(frames, "mechanism(frames)", 2, 3600)     # 0.1 degree apart at most
-        if self.scenario is None or self.series is None:
-            raise ScenarioError(f"{self.name}: no recorded run to draw (a [compare] run: take "
-                                f"one of run.runs)")
-        columns = {n: self.series[n] for n in self.series.dtype.names if n != "time"}
-        result = RunResult(self.scenario, self.series["time"], columns, 0.0)
-        try:
-            return linkage(result, frames)
-        except Error as err:
-            raise ScenarioError(f"{self.name}: {err}") from None
-
-    def __repr__(self) -> str:
-        if self.runs:
-            return f"<sewfmu.Run {self.name}: {len(self.runs)} runs {list(self.runs)}>"
-        shown = ", ".join(f"{k}={_short(v)}" for k, v in list(self.figures.items())[:4])
-        what = "a study" if self.series is None else f"{len(self.series)} samples"
-        return f"<sewfmu.Run {self.name}: {what}; {shown}>"
-
-
 @one_line
 def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *,
         out: str | Path | None = None, plot: bool = False, animate: bool = False,
@@ -290,72 +223,6 @@ def _study_run(sc: Scenario, out, plot: bool, animate: bool, report: bool) -> Ru
         raise cannot_write(err, out) from None
     return Run(sc.name, summary, None, dict(summary["units"]),
                Path(out) if out is not None else None, study=data)
-
-
-def _run_of(name: str, result, summary: dict, out: Path | None, shaft: str | None) -> Run:
-    import numpy as np  # numpy: not at `import sewfmu`
-
-    names = list(result.columns)
-    series = np.empty(len(result.time), dtype=[("time", "f8")] + [(n, "f8") for n in names])
-    series["time"] = result.time
-    for n in names:
-        series[n] = result.columns[n]
-    units = {"time": "s", **{n: result.units.get(n, "") for n in names},
-             **summary.get("units", {})}
-    return Run(name, summary, series, units, out, shaft=shaft, scenario=result.scenario)
-
-
-@dataclass
-class Sweep:
-    """A sweep's points: `rows` as in sweep.csv (the swept values, status, key figures, error);
-    `table` the same as a numpy structured array (numbers; NaN where a point failed)."""
-    name: str
-    swept: list[str]
-    rows: list[dict]
-    units: dict[str, str]
-    out: Path | None = None
-
-    @property
-    def failed(self) -> list[dict]:
-        return [r for r in self.rows if r["status"] != "ok"]
-
-    @property
-    def table(self):
-        import numpy as np  # numpy: not at `import sewfmu`
-
-        columns = self.swept + [k for k in self.units if k not in self.swept]
-        data = np.full(len(self.rows), np.nan, dtype=[(c, "f8") for c in columns])
-        for i, row in enumerate(self.rows):
-            for c in columns:
-                value = row.get(c)
-                if isinstance(value, (int, float)):
-                    data[c][i] = value
-        return data
-
-    def to_pandas(self):
-        """The rows as a pandas DataFrame (pandas must be installed)."""
-        return _pandas().DataFrame(self.rows).drop(columns=["key"], errors="ignore")
-
-    def __repr__(self) -> str:
-        return (f"<sewfmu.Sweep {self.name}: {len(self.rows)} points over "
-                f"{', '.join(self.swept)}; {len(self.failed)} failed>")
-
-
-class InaccurateRun(Error):
-    """A run whose estimated coupling error exceeds experiment.accuracy: `run` holds what it
-    gave (its files are written where out= was given)."""
-
-    def __init__(self, message: str, run: "Run"):
-        super().__init__(message)
-        self.run = run
-
-
-class SweepFailed(ScenarioError):
-    """Every point of a sweep failed: `rows` holds each with its error."""
-
-    def __init__(self, message: str, rows: list[dict]):
-        super().__init__(message)
-        self.rows = rows
 
 
 @one_line
@@ -501,16 +368,110 @@ def build(fmi: int = 2, dest: str | Path | None = None,
     return [build_fmu(name, folder, fmi=fmi) for name in (names or list(FMUS))]
 
 
-def _pandas():
-    """pandas, or one line that says how to install it."""
-    from sewfmu.extras import require  # light; pandas itself only when asked for
+# --- the design studies (docs/design.md; the commands: sewfmu/design_cli.py) -----------------
+def _refuse_fixed_and_varied(fixed, ranges, role: str, where: str) -> None:
+    """A parameter given both a value (set=) and a range (vary=, free=): one line, before the
+    FMUs are built (the range's shape is checked later, with its bounds)."""
+    from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
+        refuse_fixed_and_varied,
+    )
 
-    return require("pandas", "to_pandas()")
+    if isinstance(ranges, Mapping) and isinstance(fixed, Mapping):
+        refuse_fixed_and_varied(fixed, ranges, role, where)
 
 
-def _frame(series, index: str):
-    return _pandas().DataFrame(series).set_index(index)
+def _design_scenario(scenario, set):
+    """The scenario, its FMU files (built where missing) and their modelDescriptions by
+    instance: what a design study checks its ranges and data against before anything runs."""
+    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
+
+    sc = load(scenario, set)
+    paths = fmus_for(sc)
+    return sc, paths, {n: extracted_fmu(Path(paths[i.fmu]))[1] for n, i in sc.instances.items()}
 
 
-def _short(value) -> str:
-    return f"{value:.4g}" if isinstance(value, float) else str(value)
+@one_line
+def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
+             minimize: str | None = None, maximize: str | None = None,
+             target: Mapping[str, Any] | None = None, constraints: list | None = None,
+             set: Mapping[str, Any] | None = None, method: str = "local",
+             workers: int | None = None, out: str | Path | None = None, plot: bool = False,
+             max_evaluations: int | None = None, progress: bool = False,
+             max_runs: int | None = None):
+    """`sewfmu optimize`: vary {"inst.param": (lo, hi) or "LO..HI unit"}, one of
+    minimize=FIGURE, maximize=FIGURE, target={FIGURE: value}; constraints ["FIGURE>=VALUE unit"].
+    An Optimum (.best, .figures, .evaluations, .converged); with `out` evaluations.csv (a rerun
+    there resumes), optimize.json, with `plot` convergence.png. `progress` shows a bar on the
+    terminal. max_evaluations above `max_runs` (default 10,000, or SEWFMU_MAX_RUNS) is
+    refused before any run."""
+    from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    plot, progress = flag(plot, "plot"), flag(progress, "progress")
+    workers = workers_of(workers)
+    if constraints is not None and not isinstance(constraints, (str, tuple, list)):
+        raise ScenarioError(f"constraints: expected a list of \"FIGURE>=VALUE unit\" texts or "
+                            f"(figure, op, value) tuples, got {type(constraints).__name__}")
+    _refuse_fixed_and_varied(set, vary, "varied", "--vary, vary=")
+    sc, paths, described = _design_scenario(scenario, set)
+    known = space.figures_of_scenario(sc)
+    goal = space.goal_of(known, minimize, maximize, target)
+    limits = space.constraints_of(known, constraints)
+    variables = space.variables(sc, vary, described)
+    if plot and out is None:
+        raise ScenarioError("plot is a file: give out= a folder for it")
+    return design.optimize(sc, paths, variables, goal, limits, method, workers, out, plot,
+                           max_evaluations, progress, max_runs)
+
+
+@one_line
+def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
+        set: Mapping[str, Any] | None = None, out: str | Path | None = None,
+        max_evaluations: int | None = None, progress: bool = False,
+        max_runs: int | None = None):
+    """`sewfmu fit`: data a CSV file (a `time` column, columns named like recorded outputs) or a
+    structured array; free {"inst.param": (lo, hi)}. A Fit (.estimates, .standard_errors,
+    .residuals); with `out` fit.json, fit.png and fit_evaluations.jsonl (a rerun there
+    resumes). `progress` shows a bar on the terminal. A budget that allows more runs than
+    `max_runs` (default 10,000, or SEWFMU_MAX_RUNS) is refused before any run."""
+    from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    progress = flag(progress, "progress")
+    _refuse_fixed_and_varied(set, free, "free", "--free, free=")
+    sc, paths, described = _design_scenario(scenario, set)
+    measured = design.read_data(data)
+    ends = {"experiment.stop_time", "experiment.revolutions"}
+    sc = design.check_data(measured, sc, described, keep_end=bool(ends & {*(set or {})}))
+    free = space.variables(sc, free, described, option="--free")
+    return design.fit(sc, paths, free, measured, out, True, max_evaluations, progress,
+                      max_runs)
+
+
+@one_line
+def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figures: list[str],
+                *, set: Mapping[str, Any] | None = None, method: str = "sobol",
+                samples: int | None = None, workers: int | None = None,
+                out: str | Path | None = None, progress: bool = False,
+                max_runs: int | None = None):
+    """`sewfmu sensitivity`: SALib's Sobol or Morris indices of key figures over parameter
+    ranges, the samples run as a sweep (resumable into `out`). A Sensitivity whose `table`
+    ranks the parameters for each figure. More runs than `max_runs` (default 10,000, or
+    SEWFMU_MAX_RUNS) are refused before a sample is drawn."""
+    from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+
+    out = _folder(out, "out")
+    progress, workers = flag(progress, "progress"), workers_of(workers)
+    if not isinstance(figures, (str, tuple, list)):
+        raise ScenarioError(f"figures: expected a key figure's name or a list of them, got "
+                            f"{type(figures).__name__}")
+    _refuse_fixed_and_varied(set, vary, "varied", "--vary, vary=")
+    sc, _, described = _design_scenario(scenario, set)
+    named = space.figures_named(space.figures_of_scenario(sc), figures)
+    variables = space.variables(sc, vary, described)
+    return design.sensitivity(sc, variables, named, space.figures_of_scenario(sc), method,
+                              samples, workers, out, progress, max_runs)

@@ -1,4 +1,4 @@
-"""The public API's arguments checked at its doors (sewfmu/api.py, sewfmu/design_api.py): a
+"""The public API's arguments checked at its doors (sewfmu/api.py): a
 folder, a flag, a progress callback, and what the file system answers. Whatever a caller passes
 (another type, None, a number, a path into /proc, a file that does not exist, a name too long),
 what comes out is a sewfmu.Error of one line, never Python's TypeError or FileNotFoundError."""

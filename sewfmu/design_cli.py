@@ -1,12 +1,13 @@
 """The design studies on the command line: `sewfmu optimize`, `sewfmu fit`, `sewfmu sensitivity`.
-Their options and what they print, each calling the API's function of its verb (sewfmu/api.py).
-sewfmu/cli.py's main adds them to its commands (a module of their own: cli.py's size)."""
+Their options (ranges, goals, constraints, budgets) and what they print (optima, estimates with
+their standard errors, indices), each calling the API's function of its verb (sewfmu/api.py);
+sewfmu/cli.py's main adds them to its commands."""
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-from sewfmu import design_api as api
+from sewfmu import api
 from sewfmu.console import at_least, max_runs_option, whole_number
 from sewfmu.scenarios.format.values import ScenarioError, parse_value
 

@@ -1,4 +1,4 @@
-"""Every public function of sewfmu (sewfmu.__all__: sewfmu/api.py, sewfmu/design_api.py, the page's
+"""Every public function of sewfmu (sewfmu.__all__: sewfmu/api.py, the page's
 sewfmu.app) called with hostile arguments, one at a time in each parameter: another type, None,
 an int, NaN, bytes, a list, a dict, an empty or NUL-holding text, a path into /proc, a /proc file,
 a file that does not exist, a folder where a file belongs, a name too long for the file system.

@@ -138,7 +138,7 @@ def test_bounds_as_numpy_and_lists(bounds):
     from sewfmu.scenarios.design import space
 
     sc = sewfmu.load("punch_drive")
-    from sewfmu.design_api import _design_scenario
+    from sewfmu.api import _design_scenario
 
     _, _, described = _design_scenario("punch_drive", None)
     (v,) = space.variables(sc, {"punch.F10": bounds}, described)
