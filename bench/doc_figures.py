@@ -511,6 +511,10 @@ BLOCKS = {
     },
 }
 
+# The blocks of the pages that another script writes and checks (its markers alike): page -> names
+WRITTEN_ELSEWHERE = {"docs/running.md": ("estimate-table-punch", "estimate-table-carriage",
+                                         "estimate-scan", "estimate-noise")}   # estimate_bounds.py
+
 # The "within <number>" in the docs that are not accuracy figures against the monolithic solution,
 # and why they are left to others; every other one must lie in a block (tests/docs/test_doc_figures.py).
 WITHIN_ELSEWHERE = {

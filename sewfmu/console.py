@@ -33,15 +33,18 @@ def print_run(name: str, run, out: Path) -> None:
             unit = each.units.get(key, "").replace("1", "") if each.units.get(key) == "1" \
                 else each.units.get(key, "")
             error = errors.get("figures", {}).get(key)
-            spread = f"  ± {fmt(error)} {unit}".rstrip() if error is not None else ""
+            spread = f"  ± {fmt(error)} {unit}".rstrip() if error is not None else \
+                "  no ±" if key in errors.get("untrusted", {}) else ""
             print(f"    {key:{width}s} {fmt(value):>12s} {unit:4s}{spread}")
         done = {k: v for k, v in each.figures.items() if k not in physics}
         if errors.get("none"):
             print(f"    (no coupling error estimated: {errors['none']})")
+        elif errors.get("failed"):
+            print(f"    (no ±, no bound of the coupling error: {errors['failed']})")
         elif errors:
-            how = f"no estimate ({errors['failed']})" if errors.get("failed") else \
-                f"from {errors['method']}"
-            print(f"    (± : the estimated coupling error, {how})")
+            print(f"    (± : a bound of the coupling error, from {errors['method']})")
+        for key, why in errors.get("untrusted", {}).items():
+            print(f"    (no ± for {key}: {why})")
         if done:
             print("    " + ", ".join(f"{k} = {fmt(v)}" for k, v in done.items()))
     written = written_by_last_run(out)        # what this run wrote, not the user's own files

@@ -180,12 +180,13 @@ def run_report(path: Path, scenario, runs: list[tuple], pictures: list[tuple[str
         found = own.get("coupling_error")
         if not found or found.get("none"):
             continue
-        errors = Section("Estimated coupling error" + (f", {label}" if label else ""))
+        errors = Section("Bound of the coupling error" + (f", {label}" if label else ""))
         if found.get("failed"):
-            errors.table(["method", "no estimate"], [[found["method"], found["failed"]]])
-        else:
+            errors.table(["method", "no bound"], [[found["method"], found["failed"]]])
+        else:       # a figure without a bound says why in the bound's place
             errors.table(["figure", f"± (from {found['method']})", "unit"],
-                         [[k, e, units.get(k, "")] for k, e in found["figures"].items()],
+                         [[k, e, units.get(k, "")] for k, e in found["figures"].items()]
+                         + [[k, f"none: {why}", ""] for k, why in found.get("untrusted", {}).items()],
                          numeric={1})
         sections.append(errors)
     for label, rows in against_monolithic.items():

@@ -43,7 +43,7 @@ def run_variants(scenario: Scenario, fmu_dir: Path | None = None,
         after = "while estimating the coupling error, after the run"
         try:
             with watchdog.keeping_instead(result, after):
-                found = accuracy.estimate(sc, summary, fmu_dir)
+                found = accuracy.estimate(sc, result, summary, fmu_dir)
         except Interrupted as err:
             err.result, err.where = result, after
             raise

@@ -3,16 +3,26 @@ against the error it really has, measured against the independent solution of
 tests/independent/ (which shares no code with sewfmu); a run beyond experiment.accuracy fails
 in one line unless accepted."""
 import json
-from pathlib import Path
 
 import pytest
 
 import sewfmu
 from sewfmu.cli import main
+from tests.paths import INDEPENDENT
 
-STORED = json.loads((Path(__file__).parent / "independent" / "figures.json").read_text())
+STORED = json.loads((INDEPENDENT / "figures.json").read_text())
 PUNCH = ("contact_onset_deg", "contact_loss_deg", "contact_duration_deg", "F2_peak",
          "F2_weld_mean")
+
+
+# how far above the true error the ± may lie: at the catalogue's step within 5 times where the
+# error follows the step (onset, duration: measured 2.0 and 2.9), further where the error of this
+# one step happens to be small against its envelope (the loss's 0.005° where 0.0093° at twice the
+# step; F2_peak's ± is F2_weld_mean's relative to the figure); at 1 ms the run is refused (its ±
+# beyond 5 %), the bound still holds (docs/running.md, "How far above")
+LOOSEST = {2.5e-4: {"contact_onset_deg": 5, "contact_loss_deg": 60, "contact_duration_deg": 5,
+                    "F2_peak": 60, "F2_weld_mean": 15},
+           1e-3: dict.fromkeys(PUNCH, 250)}
 
 
 @pytest.mark.parametrize("step", [2.5e-4, 1e-3])
@@ -23,8 +33,8 @@ def test_the_estimate_covers_the_true_coupling_error_of_every_figure(step):
     for name in PUNCH:
         error = abs(run.summary[name] - exact[name]["value"])
         assert error <= estimate[name], (name, error, estimate[name])
-        # and not so cautious that it says nothing: within 30 times the true error (or 1e-3)
-        assert estimate[name] <= max(30 * error, 1e-3), (name, error, estimate[name])
+        # and not so cautious that it says nothing
+        assert estimate[name] <= LOOSEST[step][name] * error, (name, error, estimate[name])
 
 
 def test_a_step_just_below_the_stability_limit_fails_in_one_line(tmp_path, capsys):
