@@ -7,6 +7,7 @@ cleared when the work ends. tqdm is loaded only when a line is about to be drawn
 """
 from __future__ import annotations
 
+import os
 import sys
 import time
 
@@ -29,8 +30,10 @@ def bar(total: int | None, what: str, unit: str, initial: int = 0, enabled: bool
         return _NoBar()
     from tqdm import tqdm  # only when a line may be drawn (start-up time)
 
+    columns, rows = _size(sys.stderr)
     return tqdm(total=total, initial=initial, desc=what, unit=unit, disable=None, leave=False,
-                delay=QUIET_FOR, mininterval=REDRAW_EVERY, file=sys.stderr)
+                delay=QUIET_FOR, mininterval=REDRAW_EVERY, file=sys.stderr, ncols=columns,
+                nrows=rows)
 
 
 class TerminalProgress:
@@ -53,10 +56,28 @@ class TerminalProgress:
             from tqdm import tqdm  # only once a line is drawn (start-up time)
 
             self.line = tqdm(total=total, desc=f"{self.name} {label}".strip(), unit="step",
-                             leave=False, mininterval=REDRAW_EVERY, file=self.stream)
+                             leave=False, mininterval=REDRAW_EVERY, file=self.stream,
+                             ncols=_size(self.stream)[0], nrows=_size(self.stream)[1],
+                             bar_format=RUN_LINE)
         self.line.update(done - self.line.n)
 
     def close(self) -> None:
         if self.line is not None:
             self.line.close()
+            self.stream.write("\r\033[K")       # the line cleared, whatever width tqdm assumed
+            self.stream.flush()
             self.line = None
+
+
+# a run's line in words, as it was before tqdm drew it
+RUN_LINE = "{desc}: step {n_fmt} of {total_fmt} ({percentage:.0f} %), about {remaining} left"
+
+
+def _size(stream) -> tuple[int, int]:
+    """The terminal's columns and rows, 80 x 24 where it says 0: a pseudo-terminal no one has
+    sized (tqdm then counts -1 rows and draws nothing)."""
+    try:
+        size = os.get_terminal_size(stream.fileno())
+    except (OSError, ValueError, AttributeError):
+        return 80, 24
+    return size.columns or 80, size.lines or 24
