@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import (
     MANIFEST,
@@ -28,6 +27,7 @@ from sewfmu.scenarios.files.outputs import (
 )
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import check_scenario_name
+from sewfmu.scenarios.mechanisms.base import MissingRecord
 from sewfmu.scenarios.runs.compare import comparison_rows, monolithic_summary
 from sewfmu.scenarios.runs.variants import run_variants, summary_of_runs, variants
 
