@@ -10,7 +10,7 @@ against a converged run of the same physics: the punch's monolithic solution (DO
 switches as events), the same for punch_split; the carriage co-simulated at 1e-5 s (its
 last-stitch peak 0.008 µm from the continuous solution of tests/independent/carriage.py). It
 rewrites docs/running.md's blocks `<!-- figures: estimate-table-punch -->`, `-carriage`, and with
---scan `estimate-scan` and `estimate-noise`, each up to its `<!-- /figures -->` (bench/doc_figures.py
+--scan `estimate-scan` and `estimate-noise`, each up to its `<!-- /figures -->` (docs/tools/doc_figures.py
 writes the page's other blocks and leaves these alone). A row of the table whose ± falls below
 its true error is printed and the script exits 1: the factor must be measured again.
 

@@ -1,10 +1,10 @@
 """The accuracy figures that README.md and docs/ quote hold for the code as it is.
 
-bench/doc_figures.py computes them and writes them between `<!-- figures: NAME -->` markers; here
+docs/tools/doc_figures.py computes them and writes them between `<!-- figures: NAME -->` markers; here
 they are parsed back and recomputed: the README's (cheap: one tight monolithic solve and a dozen
 short runs) in the fast loop, every block of every page in a slow test. A figure holds within 2 %
 or one unit of its last printed digit, whichever is larger; a "within X" holds if the computed
-figure is not above X. When one fails, `.venv/bin/python bench/doc_figures.py` rewrites the
+figure is not above X. When one fails, `.venv/bin/python docs/tools/doc_figures.py` rewrites the
 figures (and says which promise it had to loosen)."""
 import importlib.util
 import re
@@ -18,7 +18,7 @@ from tests.paths import REPO
 def _doc_figures():
     """bench/ is scripts, not a package: the module loaded from its file (registered first, as
     its dataclasses look their module up)."""
-    spec = importlib.util.spec_from_file_location("doc_figures", REPO / "bench" / "doc_figures.py")
+    spec = importlib.util.spec_from_file_location("doc_figures", REPO / "docs" / "tools" / "doc_figures.py")
     module = sys.modules.setdefault("doc_figures", importlib.util.module_from_spec(spec))
     spec.loader.exec_module(module)
     return module
