@@ -29,11 +29,18 @@ from sewfmu.arguments import (
     workers_of,
 )
 from sewfmu.arguments import folder as _folder
+from sewfmu.components.parameters import did_you_mean
+from sewfmu.components.registry import FMUS
 from sewfmu.results import InaccurateRun, Run, Sweep, SweepFailed, _run_of
+from sewfmu.scenarios.cosim.interrupt import (
+    Interrupted,
+    deferred,
+)
 from sewfmu.scenarios.files.outputs import cannot_write, held, refuse_theirs
 from sewfmu.scenarios.format.built import checked_copy
 from sewfmu.scenarios.format.loader import catalogue as catalogue_files
 from sewfmu.scenarios.format.loader import load as _load_scenario
+from sewfmu.scenarios.format.loader import resolve
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values
 from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain
@@ -87,7 +94,7 @@ def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None)
     """load(), then every value checked as a run checks it before its first step (each against
     its FMU's declared type and range, an input fed by a connection refused), nothing run: the
     Scenario, or a ScenarioError naming the first bad value."""
-    from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.checks import check_values
 
     loaded = load(scenario, set)
     check_values(loaded)
@@ -98,9 +105,7 @@ def check(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None)
 def show(scenario: str) -> str:
     """A catalogue scenario's TOML text: save it, change it, run it (`sewfmu show`); one of
     sewfmu's FMUs by name (PunchContact): its inputs, outputs and parameters."""
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.format.loader import resolve  # loaded on first use (start-up time)
-    from sewfmu.scenarios.format.parameter_table import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.parameter_table import (
         component_text,
     )
 
@@ -122,8 +127,7 @@ def parameters(name: str | Path | Scenario, set: Mapping[str, Any] | None = None
     default, value, unit, range, meaning; print() shows it as `sewfmu show NAME --parameters`):
     of one of sewfmu's FMUs by name, or of every instance of a scenario (its values, `set`
     applied, in `value`)."""
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.format.parameter_table import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.format.parameter_table import (
         component_rows,
         scenario_rows,
     )
@@ -145,17 +149,13 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
     value (its summary is summary.json's, the figures per run under "runs"). `progress` shows
     a progress bar on the terminal; a function instead, `progress(done, total)`, hears of the
     communication steps as they are done (a page's progress bar)."""
-    from sewfmu.scenarios.cosim.interrupt import (  # loaded on first use (start-up time)
-        Interrupted,
-        deferred,
-    )
-    from sewfmu.scenarios.runs import accuracy  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.progress import TerminalProgress  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.results import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs import accuracy
+    from sewfmu.scenarios.runs.progress import TerminalProgress
+    from sewfmu.scenarios.runs.results import (
         outputs_of,
         write_outputs,
     )
-    from sewfmu.scenarios.runs.variants import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.variants import (
         run_variants,
         summary_of_runs,
     )
@@ -212,7 +212,7 @@ def run(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = None, *
 
 
 def _study_run(sc: Scenario, out, plot: bool, animate: bool, report: bool) -> Run:
-    from sewfmu.scenarios.runs.studies import run_study  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.studies import run_study
 
     if animate:
         raise ScenarioError(f"animate: the study {sc.name} is computed, not a run of the "
@@ -239,8 +239,8 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     The points are counted before any is made: more than `max_runs` (default 10,000, or
     SEWFMU_MAX_RUNS) is refused; the count and a time estimate go to stderr before the first
     run, with `progress` or where it will take long."""
-    from sewfmu.scenarios.runs import budget  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs import budget
+    from sewfmu.scenarios.runs.sweep import (
         count_points,
         declared_unit,
         points_of,
@@ -319,7 +319,7 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
     """The co-simulation beside the monolithic solution of the same physics (the punch drive's
     scenarios): {figure: {"cosim", "monolithic", "difference", "unit"}}; with `rtol` also the
     monolithic solver at that tolerance ("monolithic_rtol", "rtol_error")."""
-    from sewfmu.scenarios.runs.compare import compare as compare_rows  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.compare import compare as compare_rows
 
     sc = load(scenario, set)
     rtol = plain(rtol)
@@ -345,9 +345,7 @@ def build(fmi: int = 2, dest: str | Path | None = None,
           names: list[str] | None = None) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
     fmus/fmi3/); return their paths."""
-    from sewfmu.components.parameters import did_you_mean  # loaded on first use (start-up time)
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.build import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.build import (
         build_fmu,
         default_fmu_dir,
     )
@@ -372,7 +370,7 @@ def build(fmi: int = 2, dest: str | Path | None = None,
 def _refuse_fixed_and_varied(fixed, ranges, role: str, where: str) -> None:
     """A parameter given both a value (set=) and a range (vary=, free=): one line, before the
     FMUs are built (the range's shape is checked later, with its bounds)."""
-    from sewfmu.scenarios.runs.sweep import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.sweep import (
         refuse_fixed_and_varied,
     )
 
@@ -383,8 +381,8 @@ def _refuse_fixed_and_varied(fixed, ranges, role: str, where: str) -> None:
 def _design_scenario(scenario, set):
     """The scenario, its FMU files (built where missing) and their modelDescriptions by
     instance: what a design study checks its ranges and data against before anything runs."""
-    from sewfmu.scenarios.cosim.instances import extracted_fmu  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
+    from sewfmu.scenarios.cosim.instances import extracted_fmu
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 
     sc = load(scenario, set)
     paths = fmus_for(sc)
@@ -405,8 +403,8 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
     there resumes), optimize.json, with `plot` convergence.png. `progress` shows a bar on the
     terminal. max_evaluations above `max_runs` (default 10,000, or SEWFMU_MAX_RUNS) is
     refused before any run."""
-    from sewfmu.scenarios.design import optimize as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import optimize as design
+    from sewfmu.scenarios.design import space
 
     out = _folder(out, "out")
     plot, progress = flag(plot, "plot"), flag(progress, "progress")
@@ -436,8 +434,8 @@ def fit(scenario: str | Path | Scenario, data: Any, free: Mapping[str, Any], *,
     .residuals); with `out` fit.json, fit.png and fit_evaluations.jsonl (a rerun there
     resumes). `progress` shows a bar on the terminal. A budget that allows more runs than
     `max_runs` (default 10,000, or SEWFMU_MAX_RUNS) is refused before any run."""
-    from sewfmu.scenarios.design import fit as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import fit as design
+    from sewfmu.scenarios.design import space
 
     out = _folder(out, "out")
     progress = flag(progress, "progress")
@@ -461,8 +459,8 @@ def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figure
     ranges, the samples run as a sweep (resumable into `out`). A Sensitivity whose `table`
     ranks the parameters for each figure. More runs than `max_runs` (default 10,000, or
     SEWFMU_MAX_RUNS) are refused before a sample is drawn."""
-    from sewfmu.scenarios.design import sensitivity as design  # loaded on first use (start-up time)
-    from sewfmu.scenarios.design import space  # loaded on first use (start-up time)
+    from sewfmu.scenarios.design import sensitivity as design
+    from sewfmu.scenarios.design import space
 
     out = _folder(out, "out")
     progress, workers = flag(progress, "progress"), workers_of(workers)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from sewfmu import api, console
 from sewfmu._version import __version__
+from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.cosim import watchdog
 from sewfmu.scenarios.cosim.guardian import guard_a_child
 from sewfmu.scenarios.cosim.interrupt import Interrupted, interrupt_on_signals, settled
@@ -50,7 +51,6 @@ def cmd_build(args) -> None:
 
 
 def cmd_list(args) -> None:
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
     print("components (FMUs):")
     for name, (module, slave) in FMUS.items():
         doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__
@@ -61,7 +61,7 @@ def cmd_list(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from sewfmu.scenarios.runs.results import keep_unfinished  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.results import keep_unfinished
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / scenario.name
@@ -106,7 +106,7 @@ def cmd_compare(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from sewfmu.scenarios.runs.sweep import parse_grid_option  # loaded on first use (start-up time)
+    from sewfmu.scenarios.runs.sweep import parse_grid_option
 
     scenario = _load_with_sets(args.scenario, args.set)
     grid = dict(parse_grid_option(g) for g in args.grid or [])
@@ -132,15 +132,15 @@ def cmd_show(args) -> None:
 
 
 def cmd_export_ssp(args) -> None:
-    from sewfmu.scenarios.interop.ssp_export import export  # loaded on first use (start-up time)
+    from sewfmu.scenarios.interop.ssp_export import export
 
     scenario = _load_with_sets(args.scenario, args.set)
     print(export(scenario, Path(args.output)))
 
 
 def cmd_export_fmu(args) -> None:
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
-    from sewfmu.scenarios.interop.export_fmu import export_fmu  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+    from sewfmu.scenarios.interop.export_fmu import export_fmu
 
     scenario = _load_with_sets(args.scenario, args.set)
     scenario.fmi = args.fmi            # the components of the FMI version of the container
@@ -150,9 +150,8 @@ def cmd_export_fmu(args) -> None:
 def cmd_references(args) -> None:
     if args.fmu:
         return _references_of_files(args)
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names  # loaded on first use (start-up time)
-    from sewfmu.scenarios.references import regression as references  # loaded on first use (start-up time)
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names
+    from sewfmu.scenarios.references import regression as references
 
     paths = fmus_for_names(list(FMUS), fmi=args.fmi)
     folder = Path(args.refs) if args.refs else references.REFERENCE_DIR
@@ -163,7 +162,7 @@ def cmd_references(args) -> None:
         for written in references.regenerate(paths, folder):
             print(f"wrote {written}")
         return
-    from sewfmu.scenarios.references.reference_check import tolerance  # loaded on first use (start-up time)
+    from sewfmu.scenarios.references.reference_check import tolerance
     rtol, atol = tolerance(args.rtol, "--rtol"), tolerance(args.atol, "--atol")
     problems = [p for name in FMUS for p in references.check(name, paths[name], folder, rtol, atol)]
     for line in problems:
@@ -175,7 +174,7 @@ def cmd_references(args) -> None:
 
 def _references_of_files(args) -> None:
     """`sewfmu references --fmu PATH ...`: any FMU against its references (reference_check.py)."""
-    from sewfmu.scenarios.references import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.references import (
         fmu_reference,
         reference_check,
     )
@@ -215,7 +214,7 @@ def _references_of_files(args) -> None:
 
 
 def cmd_host_env(args) -> None:
-    from sewfmu.scenarios.interop.hosts import (  # loaded on first use (start-up time)
+    from sewfmu.scenarios.interop.hosts import (
         check_host_environment,
         host_environment,
     )
@@ -237,7 +236,7 @@ def cmd_host_env(args) -> None:
 
 
 def cmd_crosscheck(args) -> None:
-    from sewfmu.scenarios.interop.cross_check import crosscheck  # loaded on first use (start-up time)
+    from sewfmu.scenarios.interop.cross_check import crosscheck
 
     scenario = _load_with_sets(args.scenario, args.set)
     out = Path(args.out) if args.out else Path("results") / f"{scenario.name}_{args.host}"

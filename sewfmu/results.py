@@ -66,8 +66,8 @@ class Run:
         numbers (what --animate draws): {"crank_deg", "time", "samples", "points": {name:
         [(x, y) mm per frame]}, "chains": [[names joined by bars]], "tracked" (the recorded
         point), "xlim", "ylim"}. A scenario whose analysis has no drawing is a ScenarioError."""
-        from sewfmu.scenarios.cosim.master import RunResult  # loaded on first use (start-up time)
-        from sewfmu.scenarios.mechanisms.animation import linkage  # loaded on first use (start-up time)
+        from sewfmu.scenarios.cosim.master import RunResult
+        from sewfmu.scenarios.mechanisms.animation import linkage
 
         frames = whole(frames, "mechanism(frames)", 2, 3600)     # 0.1 degree apart at most
         if self.scenario is None or self.series is None:

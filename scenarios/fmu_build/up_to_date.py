@@ -10,6 +10,11 @@ from pathlib import Path
 
 from sewfmu.components.registry import FMUS
 from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
+from sewfmu.scenarios.format.fmu_file import (
+    fmu_path,
+    is_fmu_file,
+    read_fmu,
+)
 from sewfmu.scenarios.format.values import ScenarioError
 
 
@@ -37,11 +42,6 @@ def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
 def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
     """The FMU file of each FMU type a scenario uses: the files it names (an SSP system's own,
     a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale."""
-    from sewfmu.scenarios.format.fmu_file import (  # loaded on first use (start-up time)
-        fmu_path,
-        is_fmu_file,
-        read_fmu,
-    )
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
     found = {name: scenario.fmu_files[name] for name in names if name in scenario.fmu_files}

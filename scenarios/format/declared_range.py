@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 
+from sewfmu.components.units import DISPLAY_UNITS
+
 ROUNDING = 1e-12        # relative: a few roundings of a unit's factor, far below any tolerance
 
 
@@ -65,7 +67,6 @@ def _unit_hint(unit: str | None, value: float, shown: str, low: float | None,
     the unit users think in (the first display unit: rpm for rad/s, mm for m), where that is
     within the range (9550 rad/s meant as rpm; not 104720 rad/s, which was 1e6 rpm and is too
     fast in any unit)."""
-    from sewfmu.components.units import DISPLAY_UNITS  # loaded on first use (start-up time)
 
     for display, factor in list(DISPLAY_UNITS.get(unit or "", {}).items())[:1]:
         if (low is None or value / factor >= low) and value / factor <= high:

@@ -47,7 +47,7 @@ EXAMPLES = "e.g. N, kN, lbf, mm, in, rpm, rev/s, deg, N/mm, g, ms"
 @functools.lru_cache(maxsize=1)
 def _registry():
     # pint and its registry (about a second to build): only when a value comes with a unit
-    import pint  # loaded on first use (start-up time)
+    import pint
 
     registry = pint.UnitRegistry()
     # the machine shop's spellings pint lacks: revolutions, and one stitch per shaft revolution

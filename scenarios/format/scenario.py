@@ -10,8 +10,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from sewfmu.components.parameters import did_you_mean
+from sewfmu.components.parameters import (
+    ParameterError,
+    did_you_mean,
+    with_values,
+)
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
+from sewfmu.components.units import UnitError
 from sewfmu.scenarios.format.declared_units import parameter_bounds, parameter_units
 from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
 from sewfmu.scenarios.format.fmu_file import declared_bounds, model_description
@@ -146,11 +151,7 @@ class Scenario:
         experiment.revolutions with its parameters (its speed ramp included)."""
         if self.stop_time is not None:
             return self.stop_time
-        from sewfmu.components.parameters import (  # loaded on first use (start-up time)
-            ParameterError,
-            with_values,
-        )
-        from sewfmu.components.shaft import MainShaft, ShaftParams  # loaded on first use (start-up time)
+        from sewfmu.components.shaft import MainShaft, ShaftParams
 
         if self.shaft is None:        # revolutions set later (--set)
             self.shaft = self.default_shaft()
@@ -219,11 +220,7 @@ class Scenario:
         """The time the last whole revolution of the counted shaft begins (None where the
         scenario has no MainShaft to count): from there on every step is recorded, whatever
         experiment.record_every thins out before, so that the key figures never depend on it."""
-        from sewfmu.components.parameters import (  # loaded on first use (start-up time)
-            ParameterError,
-            with_values,
-        )
-        from sewfmu.components.shaft import MainShaft, ShaftParams  # loaded on first use (start-up time)
+        from sewfmu.components.shaft import MainShaft, ShaftParams
 
         shaft = self.shaft or self.default_shaft()
         if shaft not in self.instances or self.instances[shaft].fmu != "MainShaft":
@@ -320,7 +317,6 @@ class Scenario:
 
     def _in_declared_unit(self, inst: str, key: str, text: str, where: str) -> float:
         """A value given with its unit, in the unit its FMU declares for the variable."""
-        from sewfmu.components.units import UnitError  # loaded on first use (start-up time)
         from sewfmu.scenarios.format.quantities import in_declared_unit  # pint: on first use
 
         fmu = self.instances[inst].fmu

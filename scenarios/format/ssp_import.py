@@ -32,6 +32,7 @@ from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.parse import check_one_source, check_record
 from sewfmu.scenarios.format.scenario import Connection, Instance, Scenario
 from sewfmu.scenarios.format.values import ScenarioError, check_instance_name, parse_value
+from sewfmu.scenarios.mechanisms import RoleError, mechanisms
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -304,7 +305,6 @@ def _annotation(root: ET.Element, where: str) -> tuple[dict[str, str], list[str]
 
 def _analysis_of(fmu_of: dict[str, str]) -> tuple[str | None, dict[str, str]]:
     """The analysis whose roles the components' FMU types fill, if one does."""
-    from sewfmu.scenarios.mechanisms import RoleError, mechanisms  # loaded on first use (start-up time)
 
     for analysis, found in mechanisms().items():
         try:

@@ -12,6 +12,7 @@ import re
 import tomllib
 from typing import Any
 
+from sewfmu.components.units import UnitError
 from sewfmu.errors import Error, ScenarioError  # noqa: F401 (ScenarioError: where the wings import it from)
 
 
@@ -148,7 +149,6 @@ def positive_in(value: Any, unit: str, where: str) -> float:
     """A positive number in `unit`, or a string with a unit that converts to it ("2 rev",
     "720 deg" of shaft revolutions)."""
     if isinstance(value, str):
-        from sewfmu.components.units import UnitError  # loaded on first use (start-up time)
         from sewfmu.scenarios.format.quantities import in_declared_unit  # pint: on first use
         # where ends with the key ("file: experiment.step"); the message names the key itself
         origin, _, key = where.rpartition(" ")

@@ -25,6 +25,7 @@ import numpy as np
 from sewfmu.errors import Error
 from sewfmu.extras import require
 from sewfmu.processes import python_command
+from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET
 
 HOSTS = ("libcosim", "ecos", "ecos-cli")
 
@@ -93,7 +94,6 @@ def _load_tbb() -> None:
 
 
 def _run_ecos(ssp: str, step: float, stop: float, record: list[str]):
-    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
     _load_tbb()                                       # before ecospy: its library needs it
     require("ecospy", "a run in ecos")                # or one line naming the extra
@@ -179,7 +179,6 @@ def check_host_environment(env: dict[str, str]) -> list[str]:
 
 def run_ecos_cli(ssp: Path, scenario, record: list[str], out_dir: Path, timeout: float = 600.0):
     """Run the .ssp with the `ecos` command-line tool; return (time, columns, wall)."""
-    from sewfmu.scenarios.interop.ssp_export import PARAMETER_SET  # loaded on first use (start-up time)
 
     env = {**os.environ, **host_environment()}
     problems = check_host_environment(env)

@@ -29,6 +29,13 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
+from sewfmu.scenarios.cosim import (
+    guardian,
+    interrupt,
+    watchdog,
+)
+from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status
+from sewfmu.scenarios.cosim.instances import open_instance
 from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.format.fmu_file import model_description
 from sewfmu.scenarios.format.values import ScenarioError
@@ -180,13 +187,6 @@ def simulate(fmu: Path, experiment: Experiment, variables: list[str] | None = No
     and freed by sewfmu (fmpy would unload the library, unsafe for pythonfmu's)."""
     from fmpy import simulate_fmu  # fmpy: only when an FMU file is read
 
-    from sewfmu.scenarios.cosim import (  # loaded on first use (start-up time)
-        guardian,
-        interrupt,
-        watchdog,
-    )
-    from sewfmu.scenarios.cosim.fmi_calls import LogCollector, Status  # loaded on first use (start-up time)
-    from sewfmu.scenarios.cosim.instances import open_instance  # loaded on first use (start-up time)
 
     log = LogCollector()
     instance = open_instance("reference", Path(fmu), log)

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import pytest
 
+from sewfmu.scenarios.format.values import ScenarioError
+from sewfmu.scenarios.references import reference_check
+
 
 @pytest.fixture
 def fmu_reference():
     def check(fmu, refs=None, rtol: float | None = None, atol: float | None = None) -> None:
-        from sewfmu.scenarios.format.values import ScenarioError  # loaded on first use (start-up time)
-        from sewfmu.scenarios.references import reference_check  # loaded on first use (start-up time)
 
         try:
             outcomes = reference_check.check(fmu, refs, rtol, atol)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from sewfmu.scenarios.files.outputs import write_atomic
+from sewfmu.scenarios.fmu_build.sources import VERSION
 
 STYLE = """
 body { font: 15px/1.45 system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0; color: #222;
@@ -219,7 +220,6 @@ def study_report(path: Path, name: str, study, headline: dict, picture: Path) ->
     shown = Section("Pictures")
     shown.pictures([(study.description, picture)])
     what = Section("What was run")
-    from sewfmu.scenarios.fmu_build.sources import VERSION  # loaded on first use (start-up time)
     what.table(["", ""], [["study", name], ["sewfmu", VERSION]])
     write(path, f"sewfmu: {name}", study.description, [figures, shown, what])
 

@@ -9,6 +9,7 @@ from sewfmu.scenarios.files.outputs import replacing
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.values import ScenarioError, check_scenario_name
 from sewfmu.scenarios.mechanisms.base import Study
+from sewfmu.scenarios.runs.results import write_json
 
 
 def study_of(scenario: Scenario) -> Study:
@@ -38,7 +39,6 @@ def run_study(scenario: Scenario, out_dir: Path | None, plot: bool = False,
               report: bool = False) -> tuple[dict, dict]:
     """Compute a study scenario and, with out_dir, write study.json (everything), summary.json
     (the headline figures) and, with plot, NAME.png; with report, report.html."""
-    from sewfmu.scenarios.runs.results import write_json  # loaded on first use (start-up time)
 
     study = study_of(scenario)
     data, summary = study_summary(scenario)

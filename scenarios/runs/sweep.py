@@ -25,6 +25,7 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
+from sewfmu.components.registry import FMUS
 from sewfmu.extras import require
 from sewfmu.scenarios.files.matplotlib_home import pyplot
 from sewfmu.scenarios.files.outputs import (
@@ -37,12 +38,21 @@ from sewfmu.scenarios.files.outputs import (
     replacing,
     write_atomic,
 )
-from sewfmu.scenarios.format.experiment import experiment_of
+from sewfmu.scenarios.fmu_build.sources import fmu_version
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+from sewfmu.scenarios.format.declared_units import parameter_units
+from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS, experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values, values_in_text
 from sewfmu.scenarios.format.values import ScenarioError, check_scenario_name, label_of
+from sewfmu.scenarios.mechanisms.base import figures_of
 from sewfmu.scenarios.runs.budget import product, seconds_per_run, worker_count
+from sewfmu.scenarios.runs.checks import check_values
 from sewfmu.scenarios.runs.progress import bar as progress_line
+from sewfmu.scenarios.runs.report import sweep_report
+from sewfmu.scenarios.runs.results import as_run, write_csv
+from sewfmu.scenarios.runs.runner import simulate, summarize
+from sewfmu.scenarios.runs.studies import study_summary
 from sewfmu.scenarios.runs.sweep_record import (
     POINTS_FILE,
     TABLE_FILE,
@@ -50,6 +60,7 @@ from sewfmu.scenarios.runs.sweep_record import (
     open_log,
     warn,
 )
+from sewfmu.scenarios.runs.workers import run_tasks
 
 
 @dataclass(frozen=True)
@@ -70,7 +81,6 @@ class Point:
 def settings_of(scenario: Scenario, fmu_paths: dict[str, Path]) -> str:
     """Everything besides a point's own values that decides its result: the scenario's content
     with the fixed settings applied, and the version (with code hash) of every FMU it runs."""
-    from sewfmu.scenarios.fmu_build.sources import fmu_version  # loaded on first use (start-up time)
 
     content = {
         "instances": {n: {"fmu": i.fmu, "parameters": i.parameters}
@@ -235,10 +245,6 @@ def run_point(scenario: Scenario, point: Point, key: str, results_dir: str | Non
     results_dir (the output folder), its results.csv is written there under a temporary name
     (PENDING in the row): the sweep's process checks and moves it to the point's folder
     (outputs.Placing), so that no worker writes over a file or through a link."""
-    from sewfmu.scenarios.mechanisms.base import figures_of  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.results import write_csv  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.runner import simulate, summarize  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.studies import study_summary  # loaded on first use (start-up time)
 
     row = {"index": point.index, "key": key, **dict(point.values)}
     try:
@@ -282,8 +288,6 @@ def run_sweep(scenario: Scenario, points: list[Point], out_dir: Path, workers: i
     point's results, and `outputs`, the names `finish(staging, rows)` writes at the end: the
     pictures, a study's files) is checked before the first point runs, and a file of one of
     those names that sewfmu did not write there is refused in one line."""
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for  # loaded on first use (start-up time)
-    from sewfmu.scenarios.runs.checks import check_values  # loaded on first use (start-up time)
 
     workers = worker_count(workers)
     out_dir = Path(out_dir)
@@ -357,7 +361,6 @@ def _execute(scenario, todo, keys, results_dir, workers, scheduler):
             for future in as_completed(futures):
                 yield from future.result()
         return
-    from sewfmu.scenarios.runs.workers import run_tasks  # loaded on first use (start-up time)
 
     by_key = {keys[p.index]: p for p in todo}
     tasks = [(keys[p.index], run_point, (scenario, p, keys[p.index], results_dir)) for p in todo]
@@ -397,10 +400,6 @@ def _shown(value, unit: str) -> str:
 def declared_unit(scenario: Scenario, target: str) -> str:
     """The unit a swept `instance.parameter` (as its FMU declares it) or experiment key is held
     in: the unit of its axis."""
-    from sewfmu.components.registry import FMUS  # loaded on first use (start-up time)
-    from sewfmu.scenarios.format.declared_units import parameter_units
-    from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS  # loaded on first use (start-up time)
-
     inst, _, key = target.partition(".")
     if inst == "experiment":
         return EXPERIMENT_KEYS[key].unit if key in EXPERIMENT_KEYS else ""
@@ -414,7 +413,6 @@ def declared_unit(scenario: Scenario, target: str) -> str:
 def sweep_title(scenario: Scenario, rows: list[dict], swept: list[str]) -> str:
     """What was run, as it was run: the scenario's description may name a length the sweep's
     settings changed (it says 10 revolutions; --set made them 3)."""
-    from sewfmu.scenarios.runs.results import as_run  # loaded on first use (start-up time)
 
     failed = sum(1 for r in rows if r["status"] != "ok")
     head = (f"{scenario.name}: {', '.join(swept)} swept, {len(rows)} points"
@@ -501,6 +499,5 @@ def sweep_pictures(scenario: Scenario, rows: list[dict], swept: list[str], out_d
              f"sewfmu's named by `analysis`), so its points have no key figures to draw; "
              f"sweep.csv holds each point's status")
     if report:
-        from sewfmu.scenarios.runs.report import sweep_report  # loaded on first use (start-up time)
         sweep_report(out_dir / "report.html", scenario, rows, swept,
                      picture if scenario.analysis else None)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 
+from sewfmu.app import app
 from sewfmu.console import whole_number
 
 
@@ -31,7 +32,6 @@ def add_command(sub) -> None:
 
 
 def run_command(args) -> None:
-    from sewfmu.app import app  # loaded on first use (start-up time)
 
     app(args.scenario, port=args.port, host=args.host, open_browser=args.open,
         scheduler=args.scheduler, workers=args.workers, allow_hosts=args.allow_host,
