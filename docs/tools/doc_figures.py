@@ -530,7 +530,7 @@ WITHIN_ELSEWHERE = {
     # times of the way out of a stuck FMU (scenarios/cosim/watchdog.py, guardian.py): settings of
     # the code, held by the tests that send the signals
     "within 50 ms of a": "the SIGTERM after a SIGINT that still decides: "
-                         "tests/cosim/test_interruption_attack.py",
+                         "tests/cosim/test_interruptions.py",
     "within 1.1 s, or a": "the guardian's grace: tests/cosim/test_gil_held.py",
 }
 
