@@ -136,3 +136,26 @@ def design_page(tmp_path_factory, fmu_dir):
         f"docs/design.md's examples fail as a script:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}"
     with open(folder / "namespace.pickle", "rb") as f:
         return pickle.load(f)
+
+
+@pytest.fixture
+def fmus_of_this_session(fmu_dir, monkeypatch):
+    """Runs find this session's FMUs (no build of their own), and no SEWFMU_MAX_RUNS of the
+    caller's environment moves a study's bound."""
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
+    monkeypatch.delenv("SEWFMU_MAX_RUNS", raising=False)
+
+
+@pytest.fixture
+def no_runs(monkeypatch):
+    """Any run, sweep point, study evaluation or sample matrix fails the test: what is refused
+    before the first run is refused before it."""
+    from sewfmu.scenarios.design import evaluations, fit
+    from sewfmu.scenarios.runs import sweep
+
+    def ran(*_, **__):
+        raise AssertionError("a run (or a point, or the sample matrix) was made before the refusal")
+
+    monkeypatch.setattr(evaluations, "evaluate_point", ran)
+    monkeypatch.setattr(fit, "run", ran)
+    monkeypatch.setattr(sweep, "_execute", ran)

@@ -15,19 +15,8 @@ SHORT = {"experiment.revolutions": 1}
 
 
 @pytest.fixture(autouse=True)
-def _fmus(fmu_dir, monkeypatch):
-    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
-    monkeypatch.delenv("SEWFMU_MAX_RUNS", raising=False)
-
-
-@pytest.fixture
-def no_runs(monkeypatch):
-    def ran(*_, **__):
-        raise AssertionError("a point was run before the refusal")
-
-    from sewfmu.scenarios.runs import sweep  # by module: sewfmu.scenarios is also a function
-
-    monkeypatch.setattr(sweep, "_execute", ran)
+def _fmus(fmus_of_this_session):
+    pass
 
 
 def test_a_million_point_grid_is_refused_at_once_without_memory(no_runs):
@@ -68,7 +57,7 @@ def test_the_command_line_refuses_it_in_one_line_naming_the_option(capsys, tmp_p
     assert "--max-runs N" in err[0] and not (tmp_path / "out").exists()
     # the option sets the bound: 2 points over a bound of 1, under a bound of 2 (which goes on
     # to its points: the test's stand-in fails there)
-    for bound, said in (("1", "2 runs (a grid of 2), about"), ("2", "a point was run")):
+    for bound, said in (("1", "2 runs (a grid of 2), about"), ("2", "was made before the refusal")):
         assert main(["sweep", "punch_drive", "--grid", "punch.F30=1,2", "--out",
                      str(tmp_path / "out"), "--max-runs", bound, "--quiet"]) == 1
         assert said in capsys.readouterr().err
@@ -80,7 +69,7 @@ def test_the_bound_from_the_argument_and_the_environment(monkeypatch, no_runs):
     monkeypatch.setenv("SEWFMU_MAX_RUNS", "2")
     with pytest.raises(sewfmu.ScenarioError, match=r"3 runs .* more than the 2 "):
         sewfmu.sweep("punch_drive", grid={"punch.F30": [1.0, 2.0, 3.0]})
-    with pytest.raises(AssertionError, match="a point was run"):   # the argument wins
+    with pytest.raises(AssertionError, match="was made before the refusal"):   # the argument wins
         sewfmu.sweep("punch_drive", grid={"punch.F30": [1.0, 2.0, 3.0]}, max_runs=3)
 
 

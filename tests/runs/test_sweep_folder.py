@@ -22,19 +22,8 @@ R = ["--set", "experiment.revolutions=2"]
 
 
 @pytest.fixture(autouse=True)
-def _fmus(fmu_dir, monkeypatch):
-    monkeypatch.setenv("SEWFMU_FMU_DIR", str(fmu_dir))
-    monkeypatch.delenv("SEWFMU_MAX_RUNS", raising=False)
-
-
-@pytest.fixture
-def no_runs(monkeypatch):
-    def ran(*_, **__):
-        raise AssertionError("a point was run before the refusal")
-
-    from sewfmu.scenarios.runs import sweep  # by module: the engine's loop over points
-
-    monkeypatch.setattr(sweep, "_execute", ran)
+def _fmus(fmus_of_this_session):
+    pass
 
 
 @pytest.fixture
