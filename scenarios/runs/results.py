@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
+import stat
 import time
 import warnings
 from pathlib import Path
@@ -20,6 +22,7 @@ import numpy as np
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.outputs import (
     MANIFEST,
+    OutputError,
     folder_for,
     remove_debris,
     replacing,
@@ -133,7 +136,12 @@ def keep_unfinished(result: RunResult, reason: str, out_dir: Path) -> str:
     """Write the record of a run that did not finish into OUT/interrupted/: results.csv, or
     where its formatting would take beyond CSV_BUDGET, the whole record as results.npy (a
     structured array whose fields are the CSV's columns); where it is, as a line says it."""
-    folder = Path(out_dir) / UNFINISHED
+    folder = _unfinished_folder(out_dir)
+    if folder is None:
+        raise OutputError(f"{Path(out_dir) / UNFINISHED}: is a symbolic link or not a folder, "
+                          f"and sewfmu writes inside an output folder only into plain folders; "
+                          f"move it away to keep the record of the next run that does not "
+                          f"finish")
     with replacing(folder) as staging:
         name = _write_within(result, staging, CSV_BUDGET)
         write_json({"scenario": result.scenario.name, "unfinished": reason,
@@ -169,16 +177,32 @@ def _write_within(result: RunResult, staging: Path, budget: float) -> str:
 def forget_unfinished(out_dir: Path) -> None:
     """Remove the record of an earlier unfinished run from OUT: the files its manifest lists
     (a folder of that name without one is the user's, and stays)."""
-    folder = Path(out_dir) / UNFINISHED
-    if folder.is_dir() and not folder.is_symlink():
-        remove_debris(folder, recursive=True)   # a writer killed (kill -9) while it wrote
-    if not (folder / MANIFEST).is_file():
+    folder = _unfinished_folder(out_dir)
+    if folder is None or not folder.is_dir():    # a link, a file: the user's, never followed
+        return
+    remove_debris(folder, recursive=True)       # a writer killed (kill -9) while it wrote
+    if not stat.S_ISREG(_lmode(folder / MANIFEST)):
         return
     with replacing(folder):           # nothing staged: what the manifest lists goes
         pass
     with contextlib.suppress(OSError):
         (folder / MANIFEST).unlink()
         folder.rmdir()                # only if nothing else is in it
+
+
+def _lmode(path: Path) -> int:
+    try:
+        return os.lstat(path).st_mode
+    except OSError:
+        return 0
+
+
+def _unfinished_folder(out_dir: Path) -> Path | None:
+    """OUT/interrupted, a folder inside the output folder under its rule: None where it is a
+    symbolic link or anything but a folder (never followed: it is the user's)."""
+    folder = Path(out_dir) / UNFINISHED
+    mode = _lmode(folder)
+    return folder if mode == 0 or stat.S_ISDIR(mode) else None
 
 
 def as_run(scenario: Scenario) -> str:

@@ -1,0 +1,42 @@
+"""The output folder's rule after the second attack (files/outputs.py, files/manifest.py,
+runs/results.py): OUT/interrupted is a folder inside OUT (never followed as a link), the lock of
+a folder does not depend on TMPDIR, debris is removed only where sewfmu writes, a record the
+user appended to is the user's, an old manifest of names counts only for a command's own
+names, and a manifest that is not sewfmu's is refused."""
+import os
+
+import numpy as np
+import pytest
+
+from sewfmu.errors import Error
+from sewfmu.scenarios.cosim.master import RunResult
+from sewfmu.scenarios.files.manifest import MANIFEST
+from sewfmu.scenarios.runs import results
+from tests.fake_fmu import fake_scenario
+
+
+def _other_run(folder):
+    """A finished run's files in a folder outside OUT, with their manifest."""
+    record = RunResult(fake_scenario({}, [], 1.0, 0.1), np.linspace(0, 1, 5),
+                       {"a.x": np.arange(5.0)}, 0.0, units={"a.x": "m"})
+    results.keep_unfinished(record, "interrupted", folder)
+    return sorted(p.name for p in (folder / "interrupted").iterdir())
+
+
+def test_a_link_named_interrupted_is_never_followed(tmp_path):
+    other = tmp_path / "other"
+    other.mkdir()
+    files = _other_run(other)                  # sewfmu's own files, manifest and all
+    assert MANIFEST in files and "results.csv" in files
+    out = tmp_path / "i1"
+    out.mkdir()
+    os.symlink(other / "interrupted", out / "interrupted")
+    results.forget_unfinished(out)             # a finished run into i1: nothing removed
+    assert sorted(p.name for p in (other / "interrupted").iterdir()) == files
+    record = RunResult(fake_scenario({}, [], 1.0, 0.1), np.linspace(0, 2, 5),
+                       {"a.x": np.arange(5.0) + 7}, 0.0, units={"a.x": "m"})
+    before = (other / "interrupted" / "results.csv").read_bytes()
+    with pytest.raises(Error, match="interrupted: is a symbolic link"):
+        results.keep_unfinished(record, "interrupted", out)    # a Ctrl-C run into i1
+    assert (other / "interrupted" / "results.csv").read_bytes() == before
+    assert os.path.islink(out / "interrupted")
