@@ -26,15 +26,19 @@ the user replaced at such a name is the user's.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import os
 import re
 import shutil
-import tempfile
+import stat
 import threading
 from pathlib import Path
 
 import filelock
+
+try:
+    import fcntl
+except ImportError:         # Windows: the folder's lock is a file in it (held)
+    fcntl = None
 
 from sewfmu.errors import Error
 from sewfmu.scenarios.files import manifest
@@ -372,16 +376,20 @@ _HELD: dict[str, tuple[int, int]] = {}
 _HELD_LOCK = threading.Lock()
 
 
+LOCK = ".sewfmu-lock"     # where fcntl is missing (Windows): the lock file inside the folder
+
+
 @contextlib.contextmanager
 def held(folder: Path):
     """The folder for this command alone while the block runs (a run, a sweep, a study: every
     command that writes into an output folder): a second one into it is refused in one line,
     since it would replace or remove the files the first is writing (a sweep's live record).
-    The lock (filelock: flock, or Windows' own) is a file of this user's temporary folder named
-    by the folder's real path (the folder need not exist yet: nothing is made here): nothing is
-    left in the folder, and a killed process's lock goes with it. The thread that holds a
-    folder may hold it again (a study holds its folder from its first check to its last file,
-    its record and its sweep inside that)."""
+    The lock is on the folder itself (flock), so that every process agrees on it whatever its
+    environment (TMPDIR), and a killed process's lock goes with it; where there is no flock
+    (Windows) it is the file LOCK inside the folder (filelock), sewfmu's own name. A folder
+    that is not there is made, and removed again at the end where nothing was put in it. The
+    thread that holds a folder may hold it again (a study holds its folder from its first
+    check to its last file, its record and its sweep inside that)."""
     folder = Path(folder)
     key, me = os.path.realpath(folder), threading.get_ident()
     with _HELD_LOCK:
@@ -395,31 +403,69 @@ def held(folder: Path):
             with _HELD_LOCK:
                 _HELD[key] = (me, _HELD[key][1] - 1)
         return
-    lock = filelock.FileLock(_lock_file(key), timeout=0)
+    made = _made_folders(folder)
+    try:
+        with _locked(folder):
+            with _HELD_LOCK:
+                _HELD[key] = (me, 1)
+            try:
+                yield
+            finally:
+                with _HELD_LOCK:
+                    _HELD.pop(key, None)
+    finally:
+        for path in reversed(made):              # only where nothing was put in it
+            with contextlib.suppress(OSError):
+                os.rmdir(path)
+
+
+def _made_folders(folder: Path) -> list[Path]:
+    """The output folder and the folders on the way to it that are not there, made (in order)."""
+    if os.path.lexists(folder) and not folder.is_dir():
+        raise OutputError(f"output folder {folder}: exists and is not a folder")
+    missing = [p for p in [folder, *folder.parents] if not os.path.lexists(p)][::-1]
+    for path in missing:
+        with contextlib.suppress(FileExistsError):
+            os.mkdir(path)                       # mode from the umask
+    return missing
+
+
+def _busy(folder: Path) -> OutputError:
+    return OutputError(f"{folder}: another sewfmu command (a run, sweep or study) is writing "
+                       f"into this folder now; give another output folder, or run this one "
+                       f"when it has ended")
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    if fcntl is not None:
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise _busy(folder) from None
+            yield
+        finally:
+            os.close(fd)                         # the lock goes with it
+        return
+    path = folder / LOCK
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        pass
+    else:             # filelock truncates it: only an empty file a lock left is sewfmu's
+        if not stat.S_ISREG(st.st_mode) or st.st_size:
+            raise _refusal(folder, [LOCK], [])
+    lock = filelock.FileLock(str(path), timeout=0)
     try:
         lock.acquire()
     except filelock.Timeout:
-        raise OutputError(f"{folder}: another sewfmu command (a run, sweep or study) is "
-                          f"writing into this folder now; give another output folder, or run "
-                          f"this one when it has ended") from None
+        raise _busy(folder) from None
     try:
-        with _HELD_LOCK:
-            _HELD[key] = (me, 1)
-        try:
-            yield
-        finally:
-            with _HELD_LOCK:
-                _HELD.pop(key, None)
+        yield
     finally:
         lock.release()
-
-
-def _lock_file(real_path: str) -> str:
-    """The lock of an output folder: in this user's temporary folder, never in the folder."""
-    user = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
-    locks = Path(tempfile.gettempdir()) / f"sewfmu-locks-{user}"
-    locks.mkdir(mode=0o700, exist_ok=True)
-    return str(locks / f"{hashlib.sha256(real_path.encode()).hexdigest()[:32]}.lock")
 
 
 def set_aside(path: Path) -> Path:

@@ -4,6 +4,8 @@ a folder does not depend on TMPDIR, debris is removed only where sewfmu writes, 
 user appended to is the user's, an old manifest of names counts only for a command's own
 names, and a manifest that is not sewfmu's is refused."""
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -11,6 +13,7 @@ import pytest
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.manifest import MANIFEST
+from sewfmu.scenarios.files.outputs import held
 from sewfmu.scenarios.runs import results
 from tests.fake_fmu import fake_scenario
 
@@ -40,3 +43,25 @@ def test_a_link_named_interrupted_is_never_followed(tmp_path):
         results.keep_unfinished(record, "interrupted", out)    # a Ctrl-C run into i1
     assert (other / "interrupted" / "results.csv").read_bytes() == before
     assert os.path.islink(out / "interrupted")
+
+
+def test_the_folders_lock_holds_whatever_tmpdir_says(tmp_path):
+    """A second command with another TMPDIR is refused while the first holds the folder, and
+    the folder it made is not left behind empty."""
+    out = tmp_path / "new" / "k1"
+    child = ("import sys; from pathlib import Path; from sewfmu.errors import Error\n"
+             "from sewfmu.scenarios.files.outputs import held\n"
+             "try:\n    with held(Path(sys.argv[1])): print('held')\n"
+             "except Error as err: print(err)\n")
+    other_tmp = tmp_path / "other_tmp"
+    other_tmp.mkdir()
+    with held(out):
+        assert out.is_dir()
+        said = subprocess.run([sys.executable, "-c", child, str(out)], capture_output=True,
+                              text=True, env={**os.environ, "TMPDIR": str(other_tmp)},
+                              timeout=60).stdout
+        assert "another sewfmu command" in said, said
+    assert not (tmp_path / "new").exists()
+    said = subprocess.run([sys.executable, "-c", child, str(out)], capture_output=True,
+                          text=True, timeout=60).stdout
+    assert said.strip() == "held"
