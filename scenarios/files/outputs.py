@@ -121,23 +121,46 @@ def alive(pid: int) -> bool:
 
 
 def remove_debris(folder: Path, recursive: bool = False) -> list[Path]:
-    """Remove the temporaries that dead processes left in folder (and below it); return them."""
+    """Remove the temporaries that dead processes of this host left where sewfmu writes: at the
+    folder's top level and (`recursive`) in the folders its manifest lists as made by sewfmu,
+    never in a user's own folder. Only sewfmu's own kinds go: a staging folder
+    `.outputs.sewfmu-PID.partial`, a file `.NAME.sewfmu-PID.tmp` of a name sewfmu writes there
+    (its manifest, a name the manifest lists, a sweep point's pending `.point-...`); return
+    them."""
     folder = Path(folder)
     if not folder.is_dir():
         return []
+    entries = manifest.read(folder)
+    places = [folder] + [folder / e.name for e in entries.values() if recursive
+                         and e.kind == manifest.FOLDER and manifest.matches(folder, e)]
     removed = []
-    entries = folder.rglob(".*") if recursive else folder.glob(".*")
-    for entry in list(entries):
-        match = _DEBRIS.match(entry.name)
-        if not match or int(match.group(1)) == os.getpid() or alive(int(match.group(1))):
-            continue
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.rmtree(entry, ignore_errors=True)
-        else:
-            with contextlib.suppress(OSError):
-                entry.unlink()
-        removed.append(entry)
+    for place in places:
+        for entry in list(place.glob(".*")):
+            if _debris(folder, entry, entries):
+                if entry.is_dir():
+                    shutil.rmtree(entry, ignore_errors=True)
+                else:
+                    with contextlib.suppress(OSError):
+                        entry.unlink()
+                removed.append(entry)
     return removed
+
+
+def _debris(folder: Path, entry: Path, entries: dict) -> bool:
+    match = _DEBRIS.match(entry.name)
+    if not match or int(match.group(1)) == os.getpid() or alive(int(match.group(1))):
+        return False
+    try:
+        mode = os.lstat(entry).st_mode
+    except OSError:
+        return False
+    written = entry.name[1:entry.name.rindex(".sewfmu-")]
+    if match.group(2) == "partial":
+        return written == "outputs" and stat.S_ISDIR(mode)
+    inside = entry.parent.relative_to(folder).as_posix()
+    name = written if inside == "." else f"{inside}/{written}"
+    return stat.S_ISREG(mode) and (written == MANIFEST or name in entries
+                                   or (inside == "." and entry.name.startswith((".point-", "..point-"))))
 
 
 def written_by_last_run(folder: Path) -> list[str]:

@@ -370,8 +370,8 @@ def test_what_killed_runs_left_is_removed_by_the_next_run(tmp_path):
     staging.mkdir(parents=True)
     (staging / "results.csv").write_bytes(b"0" * 100_000)
     sweep = tmp_path / "sweep"
-    (sweep / "points" / "x").mkdir(parents=True)
-    torn = sweep / "points" / "x" / f".results.csv.sewfmu-{dead}.tmp"
+    sweep.mkdir()                # a point's results.csv pending, where a sweep writes it
+    torn = sweep / f".point-x.results.csv.sewfmu-{dead}.tmp"
     torn.write_bytes(b"1" * 100_000)
     alive = out / f".outputs.sewfmu-{os.getppid()}.partial"   # a live process's: kept
     alive.mkdir()

@@ -13,7 +13,7 @@ import pytest
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.manifest import MANIFEST
-from sewfmu.scenarios.files.outputs import held
+from sewfmu.scenarios.files.outputs import held, remove_debris, replacing
 from sewfmu.scenarios.runs import results
 from tests.fake_fmu import fake_scenario
 
@@ -65,3 +65,37 @@ def test_the_folders_lock_holds_whatever_tmpdir_says(tmp_path):
     said = subprocess.run([sys.executable, "-c", child, str(out)], capture_output=True,
                           text=True, timeout=60).stdout
     assert said.strip() == "held"
+
+
+def test_debris_is_removed_only_where_sewfmu_writes_and_of_its_own_kind(tmp_path):
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    pid = int(dead.stdout)
+    out = tmp_path / "d1"
+    drafts = out / "mywork" / f".drafts.sewfmu-{pid}.partial"    # the user's, in the user's
+    drafts.mkdir(parents=True)
+    (drafts / "chapter.txt").write_text("mine")
+    theirs = out / f".x.sewfmu-{pid}.tmp"                         # not a name sewfmu writes
+    theirs.write_text("mine")
+    staging = out / f".outputs.sewfmu-{pid}.partial"              # sewfmu's staging
+    (staging / "deep").mkdir(parents=True)
+    pending = out / f".point-k.results.csv.sewfmu-{pid}.tmp"      # a sweep point's
+    pending.write_text("1,2\n")
+    torn = out / f".{MANIFEST}.sewfmu-{pid}.tmp"
+    torn.write_text("{}")
+    removed = remove_debris(out, recursive=True)
+    assert sorted(removed) == sorted([staging, pending, torn])
+    assert (drafts / "chapter.txt").read_text() == "mine" and theirs.read_text() == "mine"
+
+
+def test_debris_in_a_folder_sewfmu_made_is_removed(tmp_path):
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    pid = int(dead.stdout)
+    with replacing(tmp_path) as staging:
+        (staging / "v1").mkdir()
+        (staging / "v1" / "results.csv").write_text("1\n")
+    left = tmp_path / "v1" / f".results.csv.sewfmu-{pid}.tmp"
+    left.write_text("1")
+    assert remove_debris(tmp_path, recursive=True) == [left]
+    assert remove_debris(tmp_path) == []
