@@ -4,13 +4,15 @@ One JSON object a line, a later line of a name standing for it:
 - a file: `{"file": NAME, "size", "sha256", "inode", "mtime_ns"}`, as sewfmu wrote it;
 - a record appended run by run (points.jsonl, evaluations.csv): `{"record": NAME, "size",
   "sha256", "inode"}`, the part of it written when it was listed (the rest is appended after;
-  listed before its first line, made empty, it is listed again with its first line);
+  listed before its first line, made empty, it is listed again with its first line); when
+  its command ended, listed whole with `"closed": true`;
 - a folder sewfmu made: `{"folder": NAME, "inode"}`.
 A line that is a bare name is a manifest of before (names only): `LISTED`.
 
 A file is sewfmu's only where the manifest lists it AND it still matches what was recorded
 (`matches`): the same size and content (the same inode and mtime spare reading it again), a
-record that still begins with what was recorded, a folder that is the one sewfmu made. A file
+record that still begins with what was recorded (a closed one: is all that was recorded,
+a line the user appended makes it the user's), a folder that is the one sewfmu made. A file
 the user replaced, edited or put at a listed name is the user's now. A bare name of an old
 manifest counts where the file has not changed since that manifest was written (its mtime and
 ctime not later). Every path is looked at without following links: a name whose way from the
@@ -38,6 +40,7 @@ class Entry:
     sha256: str = ""
     inode: int = 0
     mtime_ns: int = 0           # a LISTED name: the old manifest's own mtime
+    closed: bool = False        # a RECORD as its command left it when it ended: whole
 
     def line(self) -> str:
         data = {self.kind: self.name}
@@ -46,6 +49,8 @@ class Entry:
         data["inode"] = self.inode
         if self.kind == FILE:
             data["mtime_ns"] = self.mtime_ns
+        if self.kind == RECORD and self.closed:
+            data["closed"] = True
         return json.dumps(data, ensure_ascii=False)
 
 
@@ -93,7 +98,7 @@ def _parsed(line: str, written_ns: int) -> Entry | None:
                for v in numbers.values()) or not isinstance(data.get("sha256", ""), str):
         return None
     return Entry(data[kind], kind, numbers["size"], data.get("sha256", ""), numbers["inode"],
-                 numbers["mtime_ns"])
+                 numbers["mtime_ns"], kind == RECORD and data.get("closed") is True)
 
 
 def text(entries) -> str:
@@ -185,6 +190,8 @@ def matches(folder: Path, entry: Entry) -> bool:
             return _hash(path, entry.size) == entry.sha256
         if st.st_size < entry.size:                  # RECORD: it begins as recorded
             return False
+        if entry.closed and st.st_size != entry.size:   # its command ended: lines after are
+            return False                                # the user's, the record with them
         if entry.size == 0:          # made empty by sewfmu, listed again with its first line:
             return st.st_size == 0 and st.st_ino == entry.inode      # still that empty file
         return _hash(path, entry.size) == entry.sha256

@@ -26,6 +26,7 @@ the user replaced at such a name is the user's.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import re
 import shutil
@@ -377,9 +378,11 @@ def _put_in_place(folder: Path, staging: Path, kept) -> None:
         if entry is None or entry.kind == manifest.FOLDER or \
                 not manifest.matches(folder, entry):
             continue
-        listed.append(entry if entry.kind == manifest.FILE else
-                      manifest.state(folder, name, entry.kind if entry.kind == manifest.RECORD
-                                     else manifest.FILE))
+        if entry.kind == manifest.RECORD:     # whole, as it ended: the user's lines after
+            listed.append(dataclasses.replace(manifest.state(folder, name, manifest.RECORD),
+                                              closed=True))
+        else:
+            listed.append(entry if entry.kind == manifest.FILE else manifest.state(folder, name))
     listed += [e for e in folders + made if manifest.matches(folder, e)]
     write_atomic(folder / MANIFEST, lambda f: f.write(manifest.text(listed)))
 

@@ -13,7 +13,15 @@ import pytest
 from sewfmu.errors import Error
 from sewfmu.scenarios.cosim.master import RunResult
 from sewfmu.scenarios.files.manifest import MANIFEST
-from sewfmu.scenarios.files.outputs import held, remove_debris, replacing
+from sewfmu.scenarios.files.outputs import (
+    OutputError,
+    Record,
+    claim,
+    held,
+    refuse_theirs,
+    remove_debris,
+    replacing,
+)
 from sewfmu.scenarios.runs import results
 from tests.fake_fmu import fake_scenario
 
@@ -99,3 +107,21 @@ def test_debris_in_a_folder_sewfmu_made_is_removed(tmp_path):
     left.write_text("1")
     assert remove_debris(tmp_path, recursive=True) == [left]
     assert remove_debris(tmp_path) == []
+
+
+def test_a_finished_record_the_user_appended_to_is_the_users(tmp_path):
+    claim(tmp_path, ["points.jsonl"])
+    with Record(tmp_path / "points.jsonl") as record:
+        record.write('{"key": "a", "status": "ok"}\n')
+        record.write('{"key": "b", "status": "ok"}\n')
+    with replacing(tmp_path, kept=["points.jsonl"]) as staging:     # the sweep's end
+        (staging / "sweep.csv").write_text("index\n0\n1\n")
+    refuse_theirs(tmp_path, ["points.jsonl"])          # as the sweep left it: sewfmu's
+    with open(tmp_path / "points.jsonl", "a") as f:
+        f.write("# my note\n")
+    with pytest.raises(OutputError, match="points.jsonl there is not from sewfmu"):
+        refuse_theirs(tmp_path, ["points.jsonl"])
+    with replacing(tmp_path) as staging:                # a run into the folder after it
+        (staging / "results.csv").write_text("1\n")
+    assert (tmp_path / "points.jsonl").read_text().endswith("# my note\n")
+    assert not (tmp_path / "sweep.csv").exists()
