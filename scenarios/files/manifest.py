@@ -15,7 +15,9 @@ record that still begins with what was recorded (a closed one: is all that was r
 a line the user appended makes it the user's), a folder that is the one sewfmu made. A file
 the user replaced, edited or put at a listed name is the user's now. A bare name of an old
 manifest counts where the file has not changed since that manifest was written (its mtime and
-ctime not later). Every path is looked at without following links: a name whose way from the
+ctime not later), and only for one of sewfmu's own names or a name the command writes now
+(files/outputs.py): a bare name alone never lets a command remove a user's notes.txt.
+Every path is looked at without following links: a name whose way from the
 folder passes through a symbolic link, or through anything but a folder, matches nothing.
 """
 from __future__ import annotations

@@ -49,6 +49,13 @@ from sewfmu.scenarios.files.manifest import MANIFEST
 _DEBRIS = re.compile(r"^\..+\.sewfmu-(\d+)\.(tmp|partial)$")
 
 
+# the names sewfmu's commands write: where a manifest of before lists only names (no size,
+# no hash), one of these, or one the command writes now, is all it may remove by that word
+OLD_NAMES = frozenset({"results.csv", "results.npy", "summary.json", "report.html", "sweep.csv",
+                       "points.jsonl", "study.json", "evaluations.csv", "fit.json",
+                       "fit_evaluations.jsonl", "optimize.json", "sensitivity.json"})
+
+
 class OutputError(Error, ValueError):
     """An output folder sewfmu will not write into, named with the reason."""
 
@@ -358,6 +365,9 @@ def _put_in_place(folder: Path, staging: Path, kept) -> None:
     kept = [n for n in dict.fromkeys(kept) if n not in new and os.path.lexists(folder / n)]
     refuse_theirs(folder, new, entries)       # the same check as before the first run
     for name, entry in entries.items():
+        if entry.kind == manifest.LISTED and name not in new \
+                and name.rsplit("/", 1)[-1] not in OLD_NAMES:
+            continue        # an old manifest's bare name: enough only for sewfmu's own names
         if entry.kind != manifest.FOLDER and name not in kept and manifest.matches(folder, entry):
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(folder / name)         # never a link followed: matches() saw to it

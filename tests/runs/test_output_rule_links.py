@@ -125,3 +125,18 @@ def test_a_finished_record_the_user_appended_to_is_the_users(tmp_path):
         (staging / "results.csv").write_text("1\n")
     assert (tmp_path / "points.jsonl").read_text().endswith("# my note\n")
     assert not (tmp_path / "sweep.csv").exists()
+
+
+def test_an_old_manifests_bare_name_removes_only_a_file_the_command_writes(tmp_path):
+    (tmp_path / "notes.txt").write_text("thesis")
+    (tmp_path / "results.csv").write_text("old run")
+    (tmp_path / MANIFEST).write_text("notes.txt\nresults.csv\n")
+    past = os.stat(tmp_path / MANIFEST).st_mtime_ns - 10**9
+    for name in ("notes.txt", "results.csv"):
+        os.utime(tmp_path / name, ns=(past, past))
+    with replacing(tmp_path) as staging:
+        (staging / "results.csv").write_text("new run")
+        (staging / "summary.json").write_text("{}")
+    assert (tmp_path / "notes.txt").read_text() == "thesis"
+    assert (tmp_path / "results.csv").read_text() == "new run"
+    assert "notes.txt" not in (tmp_path / MANIFEST).read_text()
