@@ -84,6 +84,40 @@ def read(folder: Path) -> dict[str, Entry]:
     return entries
 
 
+# what an old manifest's bare names end with: the kinds of file sewfmu writes
+_OLD_KINDS = (".csv", ".json", ".jsonl", ".html", ".npy", ".png", ".gif")
+
+
+def foreign(folder: Path) -> str | None:
+    """What a `.sewfmu-outputs` in folder is where it is not sewfmu's manifest (a symbolic
+    link, a folder, a file with a line that is neither an entry nor a bare name of a kind of
+    file sewfmu writes), never overwritten; None where it is sewfmu's or not there."""
+    path = Path(folder) / MANIFEST
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return None
+    except OSError as err:
+        return f"not readable ({err.strerror or err})"
+    if stat.S_ISLNK(mode):
+        return "a symbolic link"
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if not stat.S_ISREG(mode):
+        return "not a file"
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        with os.fdopen(fd, "rb") as f:
+            lines = f.read().decode("utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return "a file that is not sewfmu's manifest"
+    for line in lines:
+        entry = _parsed(line, 0)
+        if entry is None or (entry.kind == LISTED and not entry.name.endswith(_OLD_KINDS)):
+            return "a file that is not sewfmu's manifest"
+    return None
+
+
 def _parsed(line: str, written_ns: int) -> Entry | None:
     if not line.startswith("{"):
         return Entry(line, LISTED, mtime_ns=written_ns) if valid_name(line) else None

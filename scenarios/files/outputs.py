@@ -201,6 +201,9 @@ def refuse_theirs(folder: Path, names, entries: dict | None = None) -> None:
     the folder) is there and is not sewfmu's (files/manifest.py: listed, and as recorded), or
     where the way to one passes through a symbolic link or a file."""
     folder = Path(folder)
+    what = manifest.foreign(folder)          # the user's: never overwritten
+    if what is not None:
+        raise _refusal(folder, [], [(MANIFEST, what)])
     entries = manifest.read(folder) if entries is None else entries
     theirs, barred = [], []
     for name in dict.fromkeys(names):

@@ -128,15 +128,44 @@ def test_a_finished_record_the_user_appended_to_is_the_users(tmp_path):
 
 
 def test_an_old_manifests_bare_name_removes_only_a_file_the_command_writes(tmp_path):
-    (tmp_path / "notes.txt").write_text("thesis")
+    (tmp_path / "notes.csv").write_text("thesis")
     (tmp_path / "results.csv").write_text("old run")
-    (tmp_path / MANIFEST).write_text("notes.txt\nresults.csv\n")
+    (tmp_path / MANIFEST).write_text("notes.csv\nresults.csv\n")
     past = os.stat(tmp_path / MANIFEST).st_mtime_ns - 10**9
-    for name in ("notes.txt", "results.csv"):
+    for name in ("notes.csv", "results.csv"):
         os.utime(tmp_path / name, ns=(past, past))
     with replacing(tmp_path) as staging:
         (staging / "results.csv").write_text("new run")
         (staging / "summary.json").write_text("{}")
-    assert (tmp_path / "notes.txt").read_text() == "thesis"
+    assert (tmp_path / "notes.csv").read_text() == "thesis"
     assert (tmp_path / "results.csv").read_text() == "new run"
-    assert "notes.txt" not in (tmp_path / MANIFEST).read_text()
+    assert "notes.csv" not in (tmp_path / MANIFEST).read_text()
+
+
+@pytest.mark.parametrize("make, what", [
+    (lambda p: os.symlink("../x", p), "is a symbolic link"),
+    (lambda p: p.write_text("thesis\nchapter one\n"), "is a file that is not sewfmu's"),
+    (lambda p: p.mkdir(), "is a folder"),
+])
+def test_a_manifest_that_is_not_sewfmus_is_refused_before_anything_is_written(tmp_path, make,
+                                                                              what):
+    make(tmp_path / MANIFEST)
+    before = sorted(os.listdir(tmp_path))
+    with pytest.raises(OutputError, match=f"{MANIFEST} there {what}"):
+        refuse_theirs(tmp_path, ["results.csv"])
+    with pytest.raises(OutputError, match=f"{MANIFEST} there {what}"):
+        with replacing(tmp_path) as staging:
+            (staging / "results.csv").write_text("1\n")
+    assert sorted(os.listdir(tmp_path)) == before
+    if what == "is a file that is not sewfmu's":
+        assert (tmp_path / MANIFEST).read_text() == "thesis\nchapter one\n"
+
+
+def test_a_run_into_a_folder_with_a_foreign_manifest_is_refused_before_it_starts(tmp_path):
+    (tmp_path / MANIFEST).write_text("my notes\n")
+    proc = subprocess.run([sys.executable, "-m", "sewfmu", "run", "punch_drive", "--set",
+                           "experiment.revolutions=1", "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "Traceback" not in proc.stderr
+    assert f"{MANIFEST} there is a file that is not sewfmu's" in proc.stderr, proc.stderr
+    assert sorted(os.listdir(tmp_path)) == [MANIFEST]
