@@ -150,8 +150,21 @@ def monolithic_figures(scenario, rtol: float | None = None,
     tolerances = {} if rtol is None else {"rtol": rtol, "atol": rtol * 1e-3}
     solution = solve(params["shaft"], params["linkage"], params["punch"], t_end,
                      sample_step=math.radians(0.01) / omega,
-                     sample_from=max(0.0, t_end - 2.2 * math.pi / omega), **tolerances)
+                     sample_from=_last_revolution_from(params["shaft"], t_end, omega),
+                     **tolerances)
     return summary_of_monolithic(solution), time.perf_counter() - started
+
+
+def _last_revolution_from(shaft: dict, t_end: float, omega: float) -> float:
+    """The time to sample from: a little before the last whole revolution the figures read,
+    which starts up to two revolutions before a run that ends between two (a stop time that is
+    not a whole number of turns)."""
+    model = MainShaft(with_values(ShaftParams(), **shaft))
+    phi_end = model.state(t_end)[0]
+    start = 2 * math.pi * (math.floor(phi_end / (2 * math.pi) + 1e-9) - 1)
+    if start < 0.0:
+        return 0.0
+    return max(0.0, model.time_of_angle(start) - 0.1 * math.pi / omega)
 
 
 # --- plots ------------------------------------------------------------------------------------

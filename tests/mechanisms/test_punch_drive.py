@@ -145,3 +145,15 @@ def test_summary_records_what_produced_it(fmu_dir, tmp_path, monkeypatch):
     assert made[0]["master"] == "jacobi" and made[0]["step"] == 2.5e-4
     assert set(made[0]["fmus"]) == {"MainShaft", "PunchLinkage", "PunchContact"}
     assert all(v == current_version() for v in made[0]["fmus"].values())
+
+
+def test_the_monolithic_figures_of_a_run_cut_between_revolutions_are_its_last_whole_ones():
+    """A stop time between two revolutions (0.17 s at 100 rad/s: 2.7 turns) is read, as the
+    co-simulation reads it, over the last whole revolution, the second: the same figures as
+    the monolithic solution of exactly two revolutions (the window once began inside it)."""
+    cut, whole = load("punch_drive"), load("punch_drive")
+    cut.set_value("experiment.stop_time", 0.17)
+    whole.set_value("experiment.revolutions", 2)
+    a, b = monolithic_summary(cut)[0], monolithic_summary(whole)[0]
+    for figure in ("contact_onset_deg", "contact_loss_deg", "F2_weld_mean", "n_contacts"):
+        assert a[figure] == pytest.approx(b[figure], rel=1e-6, abs=1e-6), figure
