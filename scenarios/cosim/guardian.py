@@ -32,10 +32,14 @@ import time
 GRACE = 0.5          # s the run's own process has to answer a signal (watchdog.GRACE)
 MARGIN = 0.6         # s more before the guardian takes the lock for held (a loaded machine)
 ENDING_LIMIT = 30.0  # s the watchdog's own ending (writing the record) may take before SIGKILL
+# s a child may take to show a forwarded signal reached Python (a byte on its wakeup pipe) before
+# the waiter takes it for ignored (an FMU's SIG_IGN or handler of its own): within the 2 s promise
+IGNORED_GRACE = 1.5
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 # the board: int64 fields, then float64 fields, then the instances' names
-STATE, BEAT, WHERE, RELAYED, ANSWERED = range(5)      # int64 index
+STATE, BEAT, WHERE, RELAYED, ANSWERED, TOLD = range(6)  # int64 index
+# TOLD: 1 once the watchdog thread has said the run's step_timeout line (the lock is free then)
 T, TIMEOUT = 8, 9                                      # float64 index (byte 64 on)
 NAMES_AT, SIZE = 128, 4096
 IDLE, RUNNING, ENDING = 0, 1, 2
@@ -75,12 +79,20 @@ class Board:
         return name, CALLS[call] if call < len(CALLS) else CALLS[0]
 
 
+# why the guardian ends a process, as its line says it (besides a held lock)
+WHY_IGNORED = ("it ignores the signal (an FMU's own signal handling), so sewfmu killed it "
+               "(SIGKILL) and the record so far could not be kept")
+WHY_ENDING = (f"its own ending (writing the record) took longer than {ENDING_LIMIT:g} s, so "
+              f"sewfmu killed it (SIGKILL) and the record may be incomplete")
+
+
 def _line(board: Board, signum: int | None, limit: float | None, own: bool,
-          end: bool = True) -> str:
-    """The one line of a run the guardian ends (or, not `end`, tells a user's process of)."""
+          end: bool = True, why: str | None = None) -> str:
+    """The one line of a run the guardian ends (or, not `end`, tells a user's process of);
+    `why` instead of the held lock where that is not the reason."""
     inst, call = board.where()
     t = board.d[T]
-    lost = ("its code holds Python's interpreter lock, so nothing in that process can answer: "
+    lost = why or ("its code holds Python's interpreter lock, so nothing in that process can answer: "
             "sewfmu killed it (SIGKILL) and the record so far is lost") if end else \
         ("its code holds Python's interpreter lock, so nothing in this process can answer; "
          "another Ctrl-C ends it (SIGKILL: the record so far is lost)")
@@ -110,6 +122,7 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
             pidfd = os.pidfd_open(child)
     signum, deadline, relayed, said = None, None, 0, False
     seen, since, ending = None, time.monotonic(), None
+    last_byte = None          # when the last signal byte came from the guarded process
     while True:
         limit = board.d[TIMEOUT]
         # a run's beat is looked at 10 times a second (a few µs each); idle, 4 times
@@ -133,6 +146,8 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
                 wake = None                   # the child's status comes next
                 continue
             signals = [b for b in data if b in SIGNALS]
+            if signals:
+                last_byte = now
             running = board.q[STATE] == RUNNING
             if signals and running:     # counted before the thread can read them
                 relayed += len(signals)
@@ -156,15 +171,25 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
         if state == ENDING:
             ending = ending or now + ENDING_LIMIT
             if now > ending:
-                return _kill(target, board, signum, None, mode, conn, child, False)
+                return _kill(target, board, signum, None, mode, conn, child, True, WHY_ENDING)
             continue
+        forwarded = _FORWARDED
+        if child is not None and forwarded is not None and \
+                now - forwarded[1] > IGNORED_GRACE and \
+                (last_byte is None or last_byte < forwarded[1] - GRACE):
+            # a signal this waiter passed on never reached the child's Python (its C handler
+            # writes the wakeup pipe, whatever holds the lock): an FMU ignores it or handles it
+            # itself, and nothing else would ever end the child
+            return _kill(target, board, signum or forwarded[0], None, mode, conn, child, True,
+                         WHY_IGNORED)
         if deadline is not None and now >= deadline and board.q[ANSWERED] < relayed:
             end_now = mode != "api" or signum == signal.SIGTERM
             done = _kill(target, board, signum, None, mode, conn, child, end_now)
             if end_now:
                 return done
             deadline, said = None, True
-        if limit > 0 and board.q[WHERE] >= 0:
+        # a step beyond step_timeout the watchdog thread has told of: the lock is free
+        if limit > 0 and board.q[WHERE] >= 0 and not board.q[TOLD]:
             beat = board.q[BEAT]
             if seen != beat:
                 seen, since = beat, now
@@ -177,9 +202,10 @@ def serve(board: Board, wake: int, relay: int | None, target: int, mode: str,
                 said, signum = True, signal.SIGINT
 
 
-def _kill(target: int, board: Board, signum, limit, mode: str, conn, child, end: bool) -> int:
+def _kill(target: int, board: Board, signum, limit, mode: str, conn, child, end: bool,
+          why: str | None = None) -> int:
     """Say the line (or hand it to the sweep), and with `end` kill the process."""
-    line = _line(board, signum, limit, mode != "worker", end)
+    line = _line(board, signum, limit, mode != "worker", end, why)
     if mode == "worker":
         if signum is None and conn is not None:          # the point's failure, to the sweep
             import pickle  # only for this message
@@ -221,6 +247,10 @@ def die_with_parent() -> None:
 
 # the child of guard_a_child: None in the waiter before the fork and in the child
 _CHILD: int | None = None
+# (signal, when) of the first signal the waiter passed on to its child while the child ran
+# FMUs and had not shown it yet (serve: none shown within IGNORED_GRACE is an ignored one)
+_FORWARDED: tuple[int, float] | None = None
+_BOARD: Board | None = None     # the child's board, in the waiter
 
 
 def guard_a_child(starting_handler) -> tuple[Board, int, int, int]:
@@ -229,7 +259,7 @@ def guard_a_child(starting_handler) -> tuple[Board, int, int, int]:
     process ends by the same). Returns, in the child, (board, wakeup write end, relay read end,
     relay write end). `starting_handler(signum, frame)`: what a signal does in the child before
     the child's own handlers (sewfmu/__main__.py's)."""
-    global _CHILD
+    global _CHILD, _BOARD
     board = Board()
     wake_r, wake_w = os.pipe()
     relay_r, relay_w = os.pipe()
@@ -250,7 +280,7 @@ def guard_a_child(starting_handler) -> tuple[Board, int, int, int]:
             os._exit(1)
         os.close(wake_r)
         return board, wake_w, relay_r, relay_w
-    _CHILD = pid
+    _CHILD, _BOARD = pid, board
     for s in SIGNALS:
         signal.signal(s, _forward)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, SIGNALS)
@@ -269,8 +299,11 @@ def guard_a_child(starting_handler) -> tuple[Board, int, int, int]:
 def _forward(signum, frame) -> None:
     """A signal to the waiter is the child's (a terminal's Ctrl-C reaches both: the child takes
     it twice, and the first decides)."""
+    global _FORWARDED
     with contextlib.suppress(OSError):
         os.kill(_CHILD, signum)
+        if _FORWARDED is None and _BOARD is not None and _BOARD.q[STATE] == RUNNING:
+            _FORWARDED = (signum, time.monotonic())
 
 
 def spawn(board: Board, wake_r: int, relay_w: int, mode: str, conn: int | None = None) -> int:

@@ -156,6 +156,7 @@ def watching(master):
     paper = board()
     paper.q[WHERE], paper.d[guardian.TIMEOUT] = -1, _timeout or 0.0
     paper.q[ANSWERED] = paper.q[RELAYED]
+    paper.q[guardian.TOLD] = 0
     paper.q[guardian.STATE] = RUNNING
     interrupt.board = _board
     _poke()
@@ -262,6 +263,8 @@ def _stuck(run, err: Interrupted | None, limit: float | None = None):
     end the run; in a process that is not sewfmu's own, say where it is stuck instead and return
     the run, which the next signal ends."""
     _answer()
+    if err is None:
+        board().q[guardian.TOLD] = 1    # this thread answers the timeout: the guardian stands down
     if _end is not None or (err is not None and err.signum == signal.SIGTERM):
         _finish(run, err, limit)        # SIGTERM ends a user's process too, as its default does
         return None
@@ -356,17 +359,16 @@ def _record_of(run):
 
 
 def _default_end(err) -> None:
-    """The end of a process that is not sewfmu's own, at the user's second signal."""
+    """The end of a process that is not sewfmu's own, at the user's second signal (or at
+    SIGTERM). It runs in the watchdog thread, where signal.signal cannot put SIGTERM's default
+    back: the process ends by os._exit with the status a shell gives a SIGTERM'd one (143)."""
     line = err.reason + (f"; {err.kept}" if err.kept else "") if isinstance(err, Interrupted) \
         else f"error: {err}"
-    sys.stderr.write(f"sewfmu: {line}\n")
+    with contextlib.suppress(Exception):
+        sys.stderr.write(f"sewfmu: {line}\n")
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()
-    if isinstance(err, Interrupted) and err.signum == signal.SIGTERM:
-        signal.signal(signal.SIGTERM, signal.SIG_DFL)      # ended as SIGTERM's default ends
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGTERM])
-        os.kill(os.getpid(), signal.SIGTERM)
     os._exit(err.exit_status if isinstance(err, Interrupted) else 1)
 
 
