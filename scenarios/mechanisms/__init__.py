@@ -1,7 +1,6 @@
-"""The mechanisms' host side: one module per mechanism (punch, punch_split, carriage, feed,
-takeup), each a subclass of base.Mechanism with its one instance `MECHANISM`: the roles its
-scenarios bind, its key figures with their units, its plots, its drawing, its studies, its
-monolithic solution, the regression cases of its FMUs. animation.py writes the GIF of any
+"""The mechanisms' host side: one module per mechanism, each a subclass of base.Mechanism with
+its one instance `MECHANISM`: the roles its scenarios bind, its key figures with their units, its
+plots, its drawing, its studies, its monolithic solution, the regression cases of its FMUs. animation.py writes the GIF of any
 mechanism that draws itself; sampling.py evaluates the models over arrays of crank angles.
 
 A scenario resolves its mechanism once, when it loads (`Scenario.mechanism`, by its `analysis`
