@@ -1,7 +1,8 @@
 """The mechanisms' host side: one module per mechanism, each a subclass of base.Mechanism with
 its one instance `MECHANISM`: the roles its scenarios bind, its key figures with their units, its
-plots, its drawing, its studies, its monolithic solution, the regression cases of its FMUs. animation.py writes the GIF of any
-mechanism that draws itself; sampling.py evaluates the models over arrays of crank angles.
+plots, its drawing, its studies, its monolithic solution, the regression cases of its FMUs.
+animation.py writes the GIF of any mechanism that draws itself; sampling.py evaluates the
+models over arrays of crank angles.
 
 A scenario resolves its mechanism once, when it loads (`Scenario.mechanism`, by its `analysis`
 name); the registry below is asked by name only there, and by what goes over every mechanism
