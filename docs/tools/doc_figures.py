@@ -532,6 +532,8 @@ WITHIN_ELSEWHERE = {
     "within 50 ms of a": "the SIGTERM after a SIGINT that still decides: "
                          "tests/cosim/test_interruptions.py",
     "within 1.1 s, or a": "the guardian's grace: tests/cosim/test_gil_held.py",
+    "within 1.5 s while it": "the waiter's grace for an FMU that ignores a signal: "
+                             "tests/cosim/test_signals_ignored.py",
 }
 
 FIELD = re.compile(r"\{(fig|within|bound|verdict|wall|stamp) ([^ }]+)(?: ([^ }]+))?\}")
