@@ -21,23 +21,6 @@ from tests.fake_fmu import Integrator, fake_scenario, maker
 H, U = 0.1, 2.0
 
 
-@pytest.fixture
-def hook():
-    """The watchdog's end as tests/cosim/test_watchdog.py's hook: what it was handed, when; it
-    releases the blocked models it is given."""
-    handed, models = [], []
-
-    def end(err):
-        handed.append((err, time.monotonic()))
-        for model in models:
-            model.release.set()
-
-    end.handed, end.models = handed, models
-    watchdog.end_process_with(end)
-    yield end
-    watchdog.end_process_with(None)
-
-
 def _spin():
     for _ in range(10000):        # a signal's handler runs between two bytecodes here
         pass

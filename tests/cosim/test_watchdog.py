@@ -39,23 +39,6 @@ class Blocking(Integrator):
         return super().step(t, h)
 
 
-@pytest.fixture
-def hook():
-    """The watchdog's end as a sewfmu process has it, recording instead of ending pytest: a list
-    of (what it was handed, when); it releases the blocked models it is given."""
-    handed, models = [], []
-
-    def end(err):
-        handed.append((err, time.monotonic()))
-        for model in models:
-            model.release.set()
-
-    end.handed, end.models = handed, models
-    watchdog.end_process_with(end)
-    yield end
-    watchdog.end_process_with(None)
-
-
 def _run(model, stop=1.0, **experiment):
     models = {"a": model}
     scenario = fake_scenario(models, [], stop, H, parameters={"a": {"u": U, "u_dot": 0.0}},
