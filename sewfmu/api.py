@@ -26,7 +26,6 @@ from sewfmu.arguments import (
     one_line,
     progress_of,
     reading,
-    workers_of,
 )
 from sewfmu.arguments import folder as _folder
 from sewfmu.components.parameters import did_you_mean
@@ -44,6 +43,8 @@ from sewfmu.scenarios.format.loader import resolve
 from sewfmu.scenarios.format.scenario import Scenario
 from sewfmu.scenarios.format.value_lists import grid_values
 from sewfmu.scenarios.format.values import ScenarioError, parse_value, plain
+from sewfmu.scenarios.runs import budget
+from sewfmu.scenarios.runs.budget import worker_count
 
 __all__ = ["load", "check", "run", "sweep", "compare", "build", "show", "parameters", "catalogue",
            "read_value", "optimize", "fit", "sensitivity", "Run", "Sweep", "Scenario",
@@ -239,7 +240,6 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     The points are counted before any is made: more than `max_runs` (default 10,000, or
     SEWFMU_MAX_RUNS) is refused; the count and a time estimate go to stderr before the first
     run, with `progress` or where it will take long."""
-    from sewfmu.scenarios.runs import budget
     from sewfmu.scenarios.runs.sweep import (
         count_points,
         declared_unit,
@@ -263,9 +263,7 @@ def sweep(scenario: str | Path | Scenario, grid: Mapping[str, list] | None = Non
     if scheduler is not None and (not isinstance(scheduler, str) or "://" not in scheduler):
         raise ScenarioError(f"scheduler: expected a Dask scheduler's address such as "
                             f"'tcp://127.0.0.1:8786', got {scheduler!r}")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(plain(workers), int)
-                                or plain(workers) < 1):
-        raise ScenarioError(f"workers: expected a whole number >= 1, got {workers!r}")
+    workers = worker_count(workers)
     out = _folder(out, "out")
     plot, report, results = flag(plot, "plot"), flag(report, "report"), flag(results, "results")
     progress, on_point = flag(progress, "progress"), callback(on_point, "on_point")
@@ -408,7 +406,7 @@ def optimize(scenario: str | Path | Scenario, vary: Mapping[str, Any], *,
 
     out = _folder(out, "out")
     plot, progress = flag(plot, "plot"), flag(progress, "progress")
-    workers = workers_of(workers)
+    workers = worker_count(workers)
     if constraints is not None and not isinstance(constraints, (str, tuple, list)):
         raise ScenarioError(f"constraints: expected a list of \"FIGURE>=VALUE unit\" texts or "
                             f"(figure, op, value) tuples, got {type(constraints).__name__}")
@@ -463,7 +461,7 @@ def sensitivity(scenario: str | Path | Scenario, vary: Mapping[str, Any], figure
     from sewfmu.scenarios.design import space
 
     out = _folder(out, "out")
-    progress, workers = flag(progress, "progress"), workers_of(workers)
+    progress, workers = flag(progress, "progress"), worker_count(workers)
     if not isinstance(figures, (str, tuple, list)):
         raise ScenarioError(f"figures: expected a key figure's name or a list of them, got "
                             f"{type(figures).__name__}")

@@ -78,14 +78,6 @@ def one_line(function: Callable) -> Callable:
     return guarded
 
 
-def workers_of(value: Any, name: str = "workers") -> int | None:
-    """How many worker processes: None (the default) or a whole number >= 1."""
-    value = plain(value)
-    if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
-        raise ScenarioError(f"{name}: expected a whole number >= 1, got {short(value)}")
-    return value
-
-
 def whole(value: Any, name: str, low: int | None = None, high: int | None = None) -> int:
     """A whole number, from low to high where given (numpy's ints too; not True, not 1.5)."""
     value = plain(value)

@@ -214,7 +214,12 @@ def test_a_function_level_import_saves_start_up_time_or_says_why():
                 if any("#" in line for line in lines[node.lineno - 2:node.end_lineno]):
                     continue                       # its reason, said
                 target = node.module if isinstance(node, ast.ImportFrom) else node.names[0].name
-                saves = target.startswith("sewfmu") and name in loaded and target not in loaded
+                # `from package import module` loads the module, not only the package
+                inner = [f"{target}.{alias.name}" for alias in getattr(node, "names", [])
+                         if f"{target}.{alias.name}" in modules]
+                targets = inner or [target]
+                saves = target.startswith("sewfmu") and name in loaded and \
+                    any(t not in loaded for t in targets)
                 if not saves:
                     needless.append(f"{path.relative_to(REPO)}:{node.lineno} {target}")
     assert not needless, sorted(set(needless))
