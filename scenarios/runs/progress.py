@@ -55,10 +55,10 @@ class TerminalProgress:
                 return
             from tqdm import tqdm  # only once a line is drawn (start-up time)
 
+            columns, rows = _size(self.stream)
             self.line = tqdm(total=total, desc=f"{self.name} {label}".strip(), unit="step",
                              leave=False, mininterval=REDRAW_EVERY, file=self.stream,
-                             ncols=_size(self.stream)[0], nrows=_size(self.stream)[1],
-                             bar_format=RUN_LINE)
+                             ncols=columns, nrows=rows, bar_format=RUN_LINE)
         self.line.update(done - self.line.n)
 
     def close(self) -> None:
