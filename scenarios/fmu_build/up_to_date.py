@@ -3,12 +3,15 @@ current when the version in its modelDescription is sewfmu's version and the con
 the code it is made from (components/ and fmu_build/: sources.py), so a run checks its FMUs by
 a stat of some fifty source files and of each FMU file (each read and hashed once per process
 while unchanged), and imports the builders (build.py: pythonfmu's and pythonfmu3's,
-xml.dom.minidom) only when an FMU is missing or stale."""
+xml.dom.minidom) only when an FMU is missing or stale. experiment.fmus = "native" takes the
+native FMUs of the same names instead (fmus/native/: native_current.py says when they are
+current; the builder, native.py, is imported only to build one)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 from sewfmu.components.registry import FMUS
+from sewfmu.scenarios.fmu_build.native_current import native_fmu_dir, native_version
 from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
 from sewfmu.scenarios.format.fmu_file import (
     fmu_path,
@@ -18,30 +21,49 @@ from sewfmu.scenarios.format.fmu_file import (
 from sewfmu.scenarios.format.values import ScenarioError
 
 
-def ensure_built(names, dest: Path | None = None, fmi: int = 2) -> dict[str, Path]:
-    """Paths of the named FMUs, (re)building any that is missing or carries other code."""
-    dest = Path(dest or default_fmu_dir(fmi))
-    version = current_version()
+def ensure_built(names, dest: Path | None = None, fmi: int = 2,
+                 kind: str = "python") -> dict[str, Path]:
+    """Paths of the named FMUs, (re)building any that is missing or carries other code; `kind`
+    "native": the native FMUs (dest default fmus/native/, fmus/native/fmi3/)."""
+    native = kind == "native"
+    dest = Path(dest or (native_fmu_dir(fmi) if native else default_fmu_dir(fmi)))
+    version = native_version() if native else current_version()
     paths = {}
     for name in names:
         path = dest / f"{name}.fmu"
         if fmu_version(path) != version:
-            from sewfmu.scenarios.fmu_build.build import build_fmu  # the builders: only to build
-            build_fmu(name, dest, fmi=fmi)
+            if native:
+                path = Path(_native_builder()(name, dest, fmi=fmi))
+            else:
+                from sewfmu.scenarios.fmu_build.build import build_fmu  # the builders: only to build
+                build_fmu(name, dest, fmi=fmi)
         paths[name] = path
     return paths
 
 
-def fmus_for_names(names: list[str], fmu_dir: Path | None = None,
-                   fmi: int = 2) -> dict[str, Path]:
+def _native_builder():
+    """native.build_native_fmu (a C compiler's builder: imported only to build)."""
+    try:
+        from sewfmu.scenarios.fmu_build.native import build_native_fmu
+    except ImportError as err:
+        raise ScenarioError(f"experiment.fmus = \"native\": this sewfmu cannot build native "
+                            f"FMUs ({err}); run with experiment.fmus = \"python\"") from None
+    return build_native_fmu
+
+
+def fmus_for_names(names: list[str], fmu_dir: Path | None = None, fmi: int = 2,
+                   kind: str = "python") -> dict[str, Path]:
     """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
-    (default: fmus/; FMI 3.0: its folder fmi3/)."""
-    return ensure_built(sorted(names), default_fmu_dir(fmi, fmu_dir), fmi=fmi)
+    (default: fmus/; FMI 3.0: its folder fmi3/); `kind` "native": in its folder native/
+    (native/fmi3/)."""
+    dest = native_fmu_dir(fmi, fmu_dir) if kind == "native" else default_fmu_dir(fmi, fmu_dir)
+    return ensure_built(sorted(names), dest, fmi=fmi, kind=kind)
 
 
 def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
     """The FMU file of each FMU type a scenario uses: the files it names (an SSP system's own,
-    a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale."""
+    a scenario file's `fmu = "path/Motor.fmu"`), and sewfmu's built where missing or stale, of
+    the build experiment.fmus names (python, native) and the FMI version experiment.fmi does."""
 
     names = sorted({inst.fmu for inst in scenario.instances.values()})
     found = {name: scenario.fmu_files[name] for name in names if name in scenario.fmu_files}
@@ -57,4 +79,5 @@ def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:
         raise ScenarioError(f"{scenario.source}: unknown FMU {unknown[0]!r} "
                             f"(known: {', '.join(FMUS)}; or the path of an .fmu file)")
     own = [n for n in names if n not in found]
-    return {**found, **(fmus_for_names(own, fmu_dir, scenario.fmi) if own else {})}
+    return {**found, **(fmus_for_names(own, fmu_dir, scenario.fmi, scenario.fmus) if own
+                        else {})}

@@ -9,6 +9,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
+from sewfmu.scenarios.format.experiment import FMU_KINDS
 from sewfmu.scenarios.format.fmu_file import is_fmu_file
 from sewfmu.scenarios.format.master_settings import MASTER_NAMES
 from sewfmu.scenarios.format.parse import check_compare, check_one_source, check_record, check_sweep
@@ -119,6 +120,10 @@ def _check_experiment(sc: Scenario, where: str) -> None:
     if isinstance(sc.fmi, bool) or sc.fmi not in FMI_VERSIONS:
         raise ScenarioError(f"{where}.fmi: the FMI version of sewfmu's FMUs, 2 or 3, got "
                             f"{short(sc.fmi)}")
+    if not isinstance(sc.fmus, str) or sc.fmus not in FMU_KINDS:
+        raise ScenarioError(f"{where}.fmus: which build of sewfmu's FMUs runs, "
+                            f"{' or '.join(map(repr, FMU_KINDS))}, got {short(sc.fmus)}")
+    sc.fmus = str.__str__(sc.fmus)
     if isinstance(sc.record_every, bool) or not isinstance(sc.record_every, int) \
             or sc.record_every < 1:
         raise ScenarioError(f"{where}.record_every: a whole number >= 1, got "

@@ -8,6 +8,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+# which build of sewfmu's own FMUs a run uses (experiment.fmus): the Python FMUs (fmus/) or the
+# compiled C ones of the same modelDescriptions (fmus/native/), which need no Python
+FMU_KINDS = ("python", "native")
+
 
 @dataclass(frozen=True)
 class ExperimentKey:
@@ -43,6 +47,9 @@ EXPERIMENT_KEYS: dict[str, ExperimentKey] = {key.name: key for key in (
     ExperimentKey("record_every", "keep every n-th communication point (long runs); the last "
                   "revolution is always kept whole", "1", "10", in_ssp=True),
     ExperimentKey("fmi", "FMI version of sewfmu's FMUs the run uses: 2 or 3", "2", "3"),
+    ExperimentKey("fmus", "which build of sewfmu's FMUs the run uses: python (fmus/) or "
+                  "native (compiled C, fmus/native/: the same variables and numbers, no "
+                  "Python needed)", '"python"', '"native"'),
     ExperimentKey("accuracy", "the coupling error a run's key figures may carry, relative to "
                   "each figure; estimated by the same run at twice the step (the adaptive "
                   "master: 8 times its tolerance); beyond it the run says so and fails; "

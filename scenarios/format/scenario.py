@@ -18,7 +18,7 @@ from sewfmu.components.parameters import (
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.components.units import UnitError
 from sewfmu.scenarios.format.declared_units import parameter_bounds, parameter_units
-from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS
+from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS, FMU_KINDS
 from sewfmu.scenarios.format.fmu_file import declared_bounds, model_description
 from sewfmu.scenarios.format.master_settings import ACCELERATIONS, MASTER_NAMES, SettingError, settings_for
 from sewfmu.scenarios.format.values import (
@@ -77,6 +77,7 @@ class Scenario:
     tolerance_master: str | None = None     # the master a file's tolerance was given for
     acceleration: str = "aitken"                          # iterative master
     fmi: int = 2                      # the FMI version of sewfmu's FMUs it runs (2 or 3)
+    fmus: str = "python"              # which build of sewfmu's FMUs it runs: FMU_KINDS
     accuracy: float | str = 0.05      # the relative coupling error its key figures may carry;
                                       # "off": not estimated
     accept_error: bool = False        # a run beyond its accuracy succeeds all the same
@@ -353,6 +354,16 @@ class Scenario:
                                     f"sewfmu's own FMUs; {self.source} runs only FMU files of "
                                     f"its own, whatever their version")
             self.fmi = int(value)
+            return
+        if key == "fmus":
+            if not isinstance(value, str) or value not in FMU_KINDS:
+                raise ScenarioError(f"{origin} experiment.fmus: which build of sewfmu's FMUs "
+                                    f"runs, {' or '.join(map(repr, FMU_KINDS))}, got "
+                                    f"{short(value)}")
+            if self.instances and all(i.fmu in self.fmu_files for i in self.instances.values()):
+                raise ScenarioError(f"{origin} experiment.fmus: chooses the build of sewfmu's "
+                                    f"own FMUs; {self.source} runs only FMU files of its own")
+            self.fmus = str.__str__(value)
             return
         if key == "accuracy":
             # "off": no estimate, no coarser run (a benchmark against a plain loop, a run whose

@@ -9,8 +9,13 @@ next FMU within the same step, as sewfmu's Jacobi master does). The container ex
 the FMU's default) and the scenario's recorded outputs; its DefaultExperiment is the scenario's,
 a whole number of even steps.
 
-The FMUs inside are sewfmu's Python FMUs: a host needs what they need (libpython loaded, a
-Python home; docs/fmi.md). They are their FMI 3.0 builds whatever the container's version: the
+With experiment.fmus = "native" the FMUs inside are sewfmu's native FMUs (compiled C, of the
+container's FMI version): the container then holds no Python code at all, and its host needs no
+Python (checked here before it is written: `_refuse_python_inside`).
+
+Otherwise the FMUs inside are sewfmu's Python FMUs: a host needs what they need (libpython
+loaded, a Python home; docs/fmi.md). They are their FMI 3.0 builds whatever the container's
+version: the
 container library hands an FMI 2.0 component the address of a callbacks struct on its own stack,
 which pythonfmu keeps and calls through at its next log line, after the struct is gone (the
 segmentation fault of every bad parameter with logging on; FMI 3.0 passes the callback by
@@ -41,6 +46,7 @@ from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.cosim.system import check_parameters
 from sewfmu.scenarios.files.outputs import OutputError
+from sewfmu.scenarios.fmu_build.native_current import build_of
 from sewfmu.scenarios.fmu_build.sources import current_version
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names
 from sewfmu.scenarios.format.fmu_file import model_description
@@ -72,6 +78,8 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
     n, h = scenario.even_steps()
     stop = scenario.end_time()
     inside = _components_inside(scenario, fmu_paths)
+    if scenario.fmus == "native":
+        _refuse_python_inside(scenario, inside)
     described = {name: model_description(path, "", validate=False)
                  for name, path in inside.items()}
     # what `sewfmu run` refuses before any FMU runs, then what it refuses running
@@ -124,6 +132,16 @@ def _components_inside(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict[s
                                 f"its host at the FMU's first log line with logging on "
                                 f"(docs/fmi.md); give the FMI 3.0 version of the FMU")
     return inside
+
+
+def _refuse_python_inside(scenario: Scenario, inside: dict[str, Path]) -> None:
+    """A container of native FMUs needs no Python: one FMU in it that carries Python code (an
+    FMU file the scenario names itself) is refused in one line, before anything is written."""
+    python = [name for name, path in sorted(inside.items()) if build_of(path) != "native"]
+    if python:
+        raise ScenarioError(f"{scenario.source}: experiment.fmus = \"native\" exports a "
+                            f"container that needs no Python, but {python[0]} "
+                            f"({inside[python[0]]}) carries Python code")
 
 
 def _refused_by_run(scenario: Scenario, fmu_paths: dict[str, Path]) -> None:
@@ -285,7 +303,15 @@ def _documentation(scenario: Scenario) -> str:
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{name}</title>"
             f"</head><body><h1>{name}</h1><p>{html.escape(scenario.description or '')}</p>"
             f"<p>sewfmu's scenario {name} as one co-simulation FMU (fmpy's container "
-            f"FMU): {fmus} stepped at a fixed step. The FMUs inside are Python FMUs "
-            f"(pythonfmu3): the host process needs libpython loaded and a Python home (3.10 to "
-            f"3.13, the standard library only), on Linux x86-64 (win64 binaries untried).</p>"
+            f"FMU): {fmus} stepped at a fixed step. {_needs(scenario)}</p>"
             f"</body></html>\n")
+
+
+def _needs(scenario: Scenario) -> str:
+    """What the container's host needs, by the build of the FMUs inside."""
+    if scenario.fmus == "native":
+        return ("The FMUs inside are native FMUs (compiled C, binaries for Linux x86-64 and "
+                "Windows x86-64): the host needs no Python.")
+    return ("The FMUs inside are Python FMUs (pythonfmu3): the host process needs libpython "
+            "loaded and a Python home (3.10 to 3.13, the standard library only), on Linux "
+            "x86-64 (win64 binaries untried).")

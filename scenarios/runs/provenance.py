@@ -1,11 +1,13 @@
 """What produced a run, as summary.json's "provenance": the scenario and its hash, every
-parameter value each instance ran with, the master, sewfmu's version and each FMU's."""
+parameter value each instance ran with, the master, sewfmu's version and each FMU's, with its
+file and its build (python or native: experiment.fmus)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 from sewfmu._version import __version__ as VERSION
 from sewfmu.scenarios.cosim.instances import extracted_fmu
+from sewfmu.scenarios.fmu_build.native_current import build_of
 from sewfmu.scenarios.format.experiment import experiment_of
 from sewfmu.scenarios.format.scenario import Scenario
 
@@ -28,7 +30,9 @@ def provenance(scenario: Scenario, fmu_paths: dict[str, Path]) -> dict:
             **scenario.master_settings(), "experiment": experiment_of(scenario),
             "end_time": scenario.end_time(), "sewfmu": VERSION,
             "fmus": {fmu: md.version for fmu, md in sorted(described.items())},
-            "fmi": {fmu: md.fmiVersion for fmu, md in sorted(described.items())}}
+            "fmi": {fmu: md.fmiVersion for fmu, md in sorted(described.items())},
+            "fmu_files": {fmu: str(Path(path).resolve()) for fmu, path in sorted(fmu_paths.items())},
+            "fmu_builds": {fmu: build_of(Path(path)) for fmu, path in sorted(fmu_paths.items())}}
 
 
 def _number(text: str) -> float | int:

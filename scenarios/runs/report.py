@@ -143,7 +143,9 @@ def provenance_sections(provenance: dict) -> list[Section]:
                          ["master", provenance["master"]], ["step", f"{provenance['step']:g} s"],
                          ["end time", f"{provenance['end_time']:.6g} s"],
                          ["sewfmu", provenance["sewfmu"]]]
-              + [[f"FMU {name}", version] for name, version in provenance["fmus"].items()])
+              + [[f"FMU {name}", f"{version} ({provenance['fmu_builds'][name]})"
+                  if name in provenance.get("fmu_builds", {}) else version]
+                 for name, version in provenance["fmus"].items()])
     params = Section("Parameters (the scenario's own values in bold)")
     rows, marked = [], []
     for inst, spec in provenance["instances"].items():

@@ -16,6 +16,9 @@ import sewfmu
 EXPERIMENT = {"revolutions": ("rev", "shaft revolutions to run"),
               "stop_time": ("s", "end of the run"),
               "step": ("s", "communication step")}
+# and the build of sewfmu's FMUs the run takes (experiment.fmus), for a co-simulated scenario
+# that has any
+FMUS_MEANING = "sewfmu's FMUs: python, or native (compiled C, the same numbers)"
 
 
 def value_of(text: str) -> Any:
@@ -52,6 +55,10 @@ def inputs_of(source: str) -> list[dict]:
         if value is not None:
             rows.append({"name": f"experiment.{key}", "value": shown(value), "unit": unit,
                          "range": "> 0", "meaning": meaning})
+    if scenario.study is None and \
+            not all(inst.fmu in scenario.fmu_files for inst in scenario.instances.values()):
+        rows.append({"name": "experiment.fmus", "value": scenario.fmus, "unit": "",
+                     "range": "python, native", "meaning": FMUS_MEANING})
     return rows
 
 
