@@ -24,7 +24,9 @@
 typedef struct SewModel {
     const char *name;          /* the FMU's modelName, e.g. "PunchContact" */
     int n_derived;             /* doubles of constants `build` works out from the parameters */
-    int n_state;               /* doubles of internal state between steps (0: stateless) */
+    int n_state;               /* doubles of internal state between steps (0: stateless); all
+                                  finite: the runtime discards a step that leaves one that is
+                                  not (slave.py's state_is_finite) */
 
     /* Check the parameters p and work out the constants into derived (n_derived doubles).
        0, or -1 with the reason in why, naming the parameter as the Python model does
@@ -50,7 +52,10 @@ typedef struct SewModel {
 } SewModel;
 
 typedef enum { SEW_REAL = 0, SEW_INTEGER = 1, SEW_BOOLEAN = 2 } SewKind;
-typedef enum { SEW_PARAMETER = 0, SEW_INPUT = 1, SEW_OUTPUT = 2, SEW_CALCULATED = 3 } SewCausality;
+/* SEW_INDEPENDENT: FMI 3.0's `time` (value reference 0), read as the current time */
+typedef enum {
+    SEW_PARAMETER = 0, SEW_INPUT = 1, SEW_OUTPUT = 2, SEW_CALCULATED = 3, SEW_INDEPENDENT = 4
+} SewCausality;
 
 /* One variable as the FMU's modelDescription declares it (written by the builder from the
    Python FMU's modelDescription, so the two FMUs declare the same). */
