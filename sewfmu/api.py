@@ -340,9 +340,10 @@ def compare(scenario: str | Path | Scenario, set: Mapping[str, Any] | None = Non
 
 @one_line
 def build(fmi: int = 2, dest: str | Path | None = None,
-          names: list[str] | None = None) -> list[Path]:
+          names: list[str] | None = None, native: bool = False) -> list[Path]:
     """Build sewfmu's FMUs (all, or those named) for FMI 2.0 or 3.0 into dest (default fmus/,
-    fmus/fmi3/); return their paths."""
+    fmus/fmi3/); native=True: the native FMUs (C, no Python on the target) into its native/
+    (native/fmi3/), from the Python FMUs there; return their paths."""
     from sewfmu.scenarios.fmu_build.build import (
         build_fmu,
         default_fmu_dir,
@@ -361,6 +362,15 @@ def build(fmi: int = 2, dest: str | Path | None = None,
             raise ScenarioError(f"unknown FMU {name!r}{did_you_mean(name, FMUS)} "
                                 f"(known: {', '.join(FMUS)})")
     folder = default_fmu_dir(fmi, Path(dest) if dest else None)
+    if native:
+        from sewfmu.scenarios.fmu_build.native import (  # the C builder: only when asked
+            build_native_fmu,
+            default_native_dir,
+        )
+
+        native_folder = default_native_dir(fmi, Path(dest) if dest else None)
+        return [build_native_fmu(name, native_folder, fmi=fmi, python_dir=folder)
+                for name in (names or list(FMUS))]
     return [build_fmu(name, folder, fmi=fmi) for name in (names or list(FMUS))]
 
 

@@ -46,7 +46,7 @@ def _load_with_sets(name: str, sets: list[str]):
 
 
 def cmd_build(args) -> None:
-    for path in api.build(args.fmi, args.dest):
+    for path in api.build(args.fmi, args.dest, native=args.native):
         print(path)
 
 
@@ -275,6 +275,9 @@ def main(argv=None, guard=None) -> int:
     p.add_argument("--dest", help="output folder (default: fmus/; with --fmi 3 its fmi3/)")
     p.add_argument("--fmi", type=_fmi_version, default=2,
                    help="FMI version of the FMUs (default 2)")
+    p.add_argument("--native", action="store_true",
+                   help="the native FMUs (C, no Python needed) into fmus/native/ (FMI 3.0: "
+                        "fmus/native/fmi3/)")
     p.set_defaults(func=cmd_build)
     p = sub.add_parser("list", help="components and scenarios, one line each")
     p.set_defaults(func=cmd_list)

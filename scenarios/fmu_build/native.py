@@ -17,11 +17,17 @@ import re
 import sys
 import tempfile
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from xml.etree import ElementTree
 
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.fmu_build.native_compile import TARGETS, NoCompiler, compile_binary
+from sewfmu.scenarios.fmu_build.native_current import (
+    NATIVE_SOURCE_DIR,
+    native_fmu_dir,
+    native_version,
+)
 from sewfmu.scenarios.fmu_build.native_description import (
     TOKEN_PLACEHOLDER,
     build_description_xml,
@@ -29,15 +35,10 @@ from sewfmu.scenarios.fmu_build.native_description import (
     native_model_description,
     token_of,
 )
-from sewfmu.scenarios.fmu_build.sources import (
-    MODEL_CODE_DIR,
-    current_version,
-    default_fmu_dir,
-    fmu_version,
-)
+from sewfmu.scenarios.fmu_build.sources import default_fmu_dir
 from sewfmu.scenarios.fmu_build.up_to_date import ensure_built
 
-NATIVE = MODEL_CODE_DIR.parent / "native"      # runtime/ and models/
+NATIVE = NATIVE_SOURCE_DIR                     # runtime/ and models/
 RUNTIME = NATIVE / "runtime"
 MODELS = NATIVE / "models"
 
@@ -75,9 +76,9 @@ HOST_NEEDS = (
 
 def default_native_dir(fmi: int = 2, root: Path | None = None) -> Path:
     """fmus/native/ (FMI 2.0) or fmus/native/fmi3/ (FMI 3.0), beside the Python FMUs' fmus/
-    and fmus/fmi3/; `root` (or SEWFMU_FMU_DIR) replaces fmus/ as for the Python FMUs."""
-    base = default_fmu_dir(2, root) / "native"
-    return base / "fmi3" if fmi == 3 else base
+    and fmus/fmi3/; `root` (or SEWFMU_FMU_DIR) replaces fmus/ as for the Python FMUs (the
+    folder a run reads: native_current.native_fmu_dir)."""
+    return native_fmu_dir(fmi, root)
 
 
 def _read(folder: Path, name: str) -> bytes:
@@ -104,20 +105,6 @@ def native_sources(name: str, fmi: int) -> dict[str, bytes]:
     return dict(sorted(files.items()))
 
 
-def native_sources_hash() -> str:
-    """Hash of all of native/ (runtime, FMI headers, models): with the Python FMUs' version, the
-    version a native FMU carries (a changed C file rebuilds it)."""
-    digest = hashlib.sha256()
-    for path in sorted(p for p in NATIVE.rglob("*") if p.is_file() and p.suffix in (".c", ".h")):
-        digest.update(str(path.relative_to(NATIVE)).encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
-
-
-def current_native_version() -> str:
-    return f"{current_version()}.c{native_sources_hash()}"
-
-
 def _slave_class(name: str):
     module, slave = FMUS[name]
     return getattr(importlib.import_module(f"sewfmu.components.{module}"), slave)
@@ -129,6 +116,16 @@ def _documentation(page: bytes) -> bytes:
     text = re.sub(r"(<h2>What a host needs</h2>\n<p>).*?(</p>)",
                   lambda m: m.group(1) + HOST_NEEDS + m.group(2), text, count=1, flags=re.S)
     return text.encode("utf-8")
+
+
+def _compile(target, sources: Path, out: Path) -> str | None:
+    """Compile one binary; the line that names a missing compiler, or None."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        compile_binary(target, sources, out)
+    except NoCompiler as err:
+        return str(err)
+    return None
 
 
 def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
@@ -155,7 +152,7 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
     token = token_of(digest.digest(), fmi)
     sources["description.c"] = description.replace(TOKEN_PLACEHOLDER, token).encode()
     sources = dict(sorted(sources.items()))
-    xml = native_model_description(python_xml, fmi, token, current_native_version(),
+    xml = native_model_description(python_xml, fmi, token, native_version(),
                                    list(sources))
     dest.mkdir(parents=True, exist_ok=True)
     missing = []
@@ -165,16 +162,17 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
         source_dir.mkdir()
         for file, data in sources.items():
             (source_dir / file).write_bytes(data)
+        # the targets' compilers run side by side (each is one process)
+        outs = [(t, tmp / "bin" / t.folders[fmi] / f"{name}{t.suffix}") for t in TARGETS]
+        with ThreadPoolExecutor(len(outs)) as pool:
+            done = [pool.submit(_compile, t, source_dir, out) for t, out in outs]
         binaries = {}
-        for target in TARGETS:
-            out = tmp / "bin" / target.folders[fmi] / f"{name}{target.suffix}"
-            out.parent.mkdir(parents=True)
-            try:
-                compile_binary(target, source_dir, out)
-            except NoCompiler as err:
-                missing.append(str(err))
-                continue
-            binaries[f"binaries/{target.folders[fmi]}/{out.name}"] = out.read_bytes()
+        for (target, out), result in zip(outs, done):
+            why = result.result()
+            if why:
+                missing.append(why)
+            else:
+                binaries[f"binaries/{target.folders[fmi]}/{out.name}"] = out.read_bytes()
         if not binaries:
             raise NoCompiler("\n".join(missing))
         for line in missing:
@@ -202,18 +200,3 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
 def build_all_native(dest: Path | None = None, fmi: int = 2,
                      names: list[str] | None = None) -> list[Path]:
     return [build_native_fmu(name, dest, fmi=fmi) for name in (names or list(MODEL_FILES))]
-
-
-def ensure_native_built(names, dest: Path | None = None, fmi: int = 2) -> dict[str, Path]:
-    """Paths of the named native FMUs in dest (default default_native_dir(fmi)), (re)building
-    any that is missing or carries another version (current_native_version)."""
-    dest = Path(dest or default_native_dir(fmi))
-    version = current_native_version()
-    paths = {}
-    for name in names:
-        path = dest / f"{name}.fmu"
-        if fmu_version(path) != version:
-            build_native_fmu(name, dest, fmi=fmi)
-        paths[name] = path
-    return paths
-

@@ -14,6 +14,8 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from sewfmu.errors import Error
+
 FLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra"]
 # the one line said where a target's compiler is missing
 INSTALL_HINT = {
@@ -24,7 +26,7 @@ INSTALL_HINT = {
 }
 
 
-class NoCompiler(RuntimeError):
+class NoCompiler(Error, RuntimeError):
     """No compiler for a target: the message is the one line that says what to install."""
 
 

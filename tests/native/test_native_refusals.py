@@ -1,0 +1,127 @@
+"""What the native FMUs refuse with an Error status (fmpy raises FMICallException), each with
+its reason through the logger as "<instance> (<Model>): <reason>": an unknown value reference,
+a value outside its declared range, NaN or infinity, a write to an output, a parameter set
+after initialization, a garbled serialized state; and the instance is left as it was."""
+from __future__ import annotations
+
+import math
+
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from tests.native.fmpy_native import ERROR, Instance
+
+VERSIONS = [2, pytest.param(3, marks=pytest.mark.slow)]
+
+
+@pytest.fixture(params=VERSIONS, ids=lambda fmi: f"fmi{fmi}")
+def shaft(request, native_fmu):
+    fmi = request.param
+    inst = Instance(native_fmu("MainShaft", fmi), fmi, name="shaft1")
+    yield inst
+    inst.free()
+
+
+def _refused(inst: Instance, call, *args, reason: str) -> None:
+    """The call raises with fmi2Error/fmi3Error, and the last log line gives the reason."""
+    with pytest.raises(FMICallException) as caught:
+        call(*args)
+    assert caught.value.status == ERROR
+    status, line = inst.lines[-1]
+    assert status == ERROR
+    assert line.startswith("shaft1 (MainShaft): "), line
+    assert reason in line, line
+
+
+def _get(inst, vrs):
+    return (inst.fmu.getReal if inst.fmi == 2 else inst.fmu.getFloat64)(vrs)
+
+
+def _set(inst, vrs, values):
+    return (inst.fmu.setReal if inst.fmi == 2 else inst.fmu.setFloat64)(vrs, values)
+
+
+def test_an_unknown_value_reference_is_refused(shaft):
+    _refused(shaft, _get, shaft, [999], reason="no such variable (value reference 999)")
+    _refused(shaft, _set, shaft, [999], [1.0], reason="no such variable (value reference 999,")
+    integer = shaft.fmu.getInteger if shaft.fmi == 2 else shaft.fmu.getInt32
+    _refused(shaft, integer, [shaft.vr["omega0"]], reason="no such variable")
+
+
+def test_a_value_outside_its_range_is_refused_and_not_taken(shaft):
+    vr = shaft.vr["omega0"]
+    _refused(shaft, _set, shaft, [vr], [5000.0], reason="outside its range [0, 2000] rad/s")
+    _refused(shaft, _set, shaft, [vr], [-1.0], reason="outside its range")
+    assert _get(shaft, [vr]) == [100.0]
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_nan_or_infinity_is_refused(shaft, value):
+    _refused(shaft, _set, shaft, [shaft.vr["ramp_time"]], [value], reason="not a finite number")
+    assert _get(shaft, [shaft.vr["ramp_time"]]) == [0.0]
+
+
+def test_a_set_is_all_or_nothing(shaft):
+    vrs = [shaft.vr["omega0"], shaft.vr["ramp_time"]]
+    _refused(shaft, _set, shaft, vrs, [50.0, -3.0], reason="ramp_time")
+    assert _get(shaft, vrs) == [100.0, 0.0]
+
+
+def test_setting_an_output_is_refused(shaft):
+    _refused(shaft, _set, shaft, [shaft.vr["phi"]], [1.0], reason="phi is an output")
+
+
+def test_a_parameter_set_after_initialization_is_refused(shaft):
+    shaft.start()
+    _refused(shaft, _set, shaft, [shaft.vr["omega0"]], [50.0],
+             reason="parameter omega0 is fixed: it cannot change after exitInitializationMode")
+    shaft.fmu.doStep(0.0, 1e-3)
+    assert shaft.outputs(["phi", "omega"]) == [100.0 * 1e-3, 100.0]
+
+
+def test_a_bad_parameter_makes_exit_initialization_an_error_and_every_step_refused(shaft):
+    _set(shaft, [shaft.vr["omega0"]], [0.0])       # within [0, 2000], but the model needs > 0
+    if shaft.fmi == 2:
+        shaft.fmu.setupExperiment(startTime=0.0)
+        shaft.fmu.enterInitializationMode()
+    else:
+        shaft.fmu.enterInitializationMode(startTime=0.0)
+    _refused(shaft, shaft.fmu.exitInitializationMode, reason="parameter omega0: must be > 0")
+    _refused(shaft, shaft.fmu.doStep, 0.0, 1e-3, reason="refused: parameter omega0")
+
+
+def test_a_step_out_of_time_is_refused(shaft):
+    shaft.start()
+    _refused(shaft, shaft.fmu.doStep, 0.5, 1e-3, reason="the last one ended at t = 0 s")
+    _refused(shaft, shaft.fmu.doStep, 0.0, -1e-3, reason="the step size must be positive")
+
+
+@pytest.mark.parametrize("damage", ["flip", "truncate", "foreign", "empty"])
+def test_a_garbled_state_is_refused(shaft, damage):
+    shaft.start()
+    shaft.fmu.doStep(0.0, 1e-3)
+    fmi2 = shaft.fmi == 2
+    state = (shaft.fmu.getFMUstate if fmi2 else shaft.fmu.getFMUState)()
+    data = bytearray((shaft.fmu.serializeFMUstate if fmi2 else shaft.fmu.serializeFMUState)(
+        state))
+    if damage == "flip":
+        data[len(data) // 2] ^= 0x10
+    elif damage == "truncate":
+        data = data[:-9]
+    elif damage == "foreign":
+        data = bytearray(b'{"params": {}, "inputs": {}}')      # a Python FMU's kind of state
+    else:
+        data = bytearray()
+    deserialize = shaft.fmu.deSerializeFMUstate if fmi2 else shaft.fmu.deserializeFMUState
+    _refused(shaft, deserialize, bytes(data), reason="not a state of this FMU")
+    shaft.fmu.doStep(1e-3, 1e-3)                 # the instance goes on where it was
+    assert shaft.outputs(["phi"]) == [100.0 * 2e-3]
+
+
+def test_a_step_the_instance_cannot_take_before_initialization_is_refused(shaft):
+    _refused(shaft, shaft.fmu.doStep, 0.0, 1e-3, reason="called before exitInitializationMode")
+
+
+def test_outputs_read_before_initialization_are_the_models(shaft):
+    _set(shaft, [shaft.vr["omega0"]], [50.0])
+    assert shaft.outputs(["phi", "omega", "epsilon"]) == [0.0, 50.0, 0.0]
