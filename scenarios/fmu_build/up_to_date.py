@@ -21,10 +21,11 @@ from sewfmu.scenarios.format.fmu_file import (
 from sewfmu.scenarios.format.values import ScenarioError
 
 
-def ensure_built(names, dest: Path | None = None, fmi: int = 2,
-                 kind: str = "python") -> dict[str, Path]:
+def ensure_built(names, dest: Path | None = None, fmi: int = 2, kind: str = "python",
+                 python_dir: Path | None = None) -> dict[str, Path]:
     """Paths of the named FMUs, (re)building any that is missing or carries other code; `kind`
-    "native": the native FMUs (dest default fmus/native/, fmus/native/fmi3/)."""
+    "native": the native FMUs (dest default fmus/native/, fmus/native/fmi3/), each made from
+    the Python FMU of its name in `python_dir` (default fmus/, fmus/fmi3/)."""
     native = kind == "native"
     dest = Path(dest or (native_fmu_dir(fmi) if native else default_fmu_dir(fmi)))
     version = native_version() if native else current_version()
@@ -33,7 +34,7 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2,
         path = dest / f"{name}.fmu"
         if fmu_version(path) != version:
             if native:
-                path = Path(_native_builder()(name, dest, fmi=fmi))
+                path = _build_native(name, dest, fmi, python_dir)
             else:
                 from sewfmu.scenarios.fmu_build.build import build_fmu  # the builders: only to build
                 build_fmu(name, dest, fmi=fmi)
@@ -41,23 +42,32 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2,
     return paths
 
 
-def _native_builder():
-    """native.build_native_fmu (a C compiler's builder: imported only to build)."""
+def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None) -> Path:
+    """native.build_native_fmu (a C compiler's builder: imported only to build); a native FMU
+    that cannot be made here (no builder, a model without its C twin yet) is one line."""
     try:
         from sewfmu.scenarios.fmu_build.native import build_native_fmu
     except ImportError as err:
         raise ScenarioError(f"experiment.fmus = \"native\": this sewfmu cannot build native "
                             f"FMUs ({err}); run with experiment.fmus = \"python\"") from None
-    return build_native_fmu
+    try:
+        return Path(build_native_fmu(name, dest, fmi=fmi, python_dir=python_dir))
+    except (FileNotFoundError, KeyError) as err:
+        raise ScenarioError(f"experiment.fmus = \"native\": the native {name} cannot be built "
+                            f"({' '.join(str(err).split())}); run it with experiment.fmus = "
+                            f"\"python\"") from None
 
 
 def fmus_for_names(names: list[str], fmu_dir: Path | None = None, fmi: int = 2,
                    kind: str = "python") -> dict[str, Path]:
     """sewfmu's FMUs of these names for FMI `fmi`, built where missing or stale, in fmu_dir
     (default: fmus/; FMI 3.0: its folder fmi3/); `kind` "native": in its folder native/
-    (native/fmi3/)."""
-    dest = native_fmu_dir(fmi, fmu_dir) if kind == "native" else default_fmu_dir(fmi, fmu_dir)
-    return ensure_built(sorted(names), dest, fmi=fmi, kind=kind)
+    (native/fmi3/), made from the Python FMUs of fmu_dir."""
+    python_dir = default_fmu_dir(fmi, fmu_dir)
+    if kind != "native":
+        return ensure_built(sorted(names), python_dir, fmi=fmi)
+    return ensure_built(sorted(names), native_fmu_dir(fmi, fmu_dir), fmi=fmi, kind=kind,
+                        python_dir=python_dir)
 
 
 def fmus_for(scenario, fmu_dir: Path | None = None) -> dict[str, Path]:

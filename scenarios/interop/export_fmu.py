@@ -77,9 +77,9 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
         raise ScenarioError(f"--fmi: the FMI version of the exported FMU, 2 or 3, got {fmi!r}")
     n, h = scenario.even_steps()
     stop = scenario.end_time()
-    inside = _components_inside(scenario, fmu_paths)
     if scenario.fmus == "native":
-        _refuse_python_inside(scenario, inside)
+        _refuse_python_inside(scenario, fmu_paths)
+    inside = _components_inside(scenario, fmu_paths)
     described = {name: model_description(path, "", validate=False)
                  for name, path in inside.items()}
     # what `sewfmu run` refuses before any FMU runs, then what it refuses running

@@ -24,7 +24,7 @@ from sewfmu.scenarios.fmu_build.native_current import (
     native_sources_hash,
     native_version,
 )
-from sewfmu.scenarios.fmu_build.sources import fmu_version
+from sewfmu.scenarios.fmu_build.sources import default_fmu_dir, fmu_version
 from sewfmu.scenarios.format.parse import from_dict
 from sewfmu.scenarios.format.scenario import Instance, Scenario
 from sewfmu.scenarios.format.values import ScenarioError
@@ -50,13 +50,20 @@ def stand_in(python_fmu: Path, folder: Path, version: str | None = None) -> Path
 
 
 @pytest.fixture(scope="module")
-def shaft_fmus(tmp_path_factory):
-    """A folder of FMUs as a run looks for them: the Python MainShaft in it, and a stand-in of
-    the native one in its native/ folder."""
+def shaft_python(tmp_path_factory):
     base = tmp_path_factory.mktemp("fmus")
-    python = build_fmu("MainShaft", base)
-    native = stand_in(python, native_fmu_dir(2, base))
-    return base, python, native
+    return base, build_fmu("MainShaft", base)
+
+
+@pytest.fixture
+def shaft_fmus(shaft_python, monkeypatch):
+    """A folder of FMUs as a run looks for them: the Python MainShaft in it, and a stand-in of
+    the native one in its native/ folder, current for the C sources as they are now (held so
+    for the test, whatever another session edits in native/ meanwhile)."""
+    base, python = shaft_python
+    now = native_version()
+    monkeypatch.setattr(up_to_date, "native_version", lambda: now)
+    return base, python, stand_in(python, native_fmu_dir(2, base), now)
 
 
 def shaft_only() -> Scenario:
@@ -123,6 +130,34 @@ def test_the_key_is_listed_with_the_others():
                          )["fmus"] == "native"
 
 
+SPIN = """description = "the shaft alone"
+[instances.shaft]
+fmu = "MainShaft"
+[experiment]
+stop_time = 0.01
+step = 0.001
+"""
+
+
+def test_the_page_offers_it_and_reads_it_as_a_run_does(shaft_fmus, tmp_path, monkeypatch):
+    from sewfmu.app.values import changed_values, command_line, inputs_of, scenario_toml
+
+    monkeypatch.setenv("SEWFMU_FMU_DIR", str(shaft_fmus[0]))        # the stand-in's folder
+    spin = tmp_path / "spin.toml"
+    spin.write_text(SPIN)
+    rows = {row["name"]: row for row in inputs_of(str(spin))}
+    assert rows["experiment.fmus"]["value"] == "python"
+    assert rows["experiment.fmus"]["range"] == "python, native"
+    assert "experiment.fmus" not in {row["name"] for row in inputs_of("takeup_tolerance")}
+    defaults = {name: row["value"] for name, row in rows.items()}
+    changed = changed_values(str(spin), {"experiment.fmus": "native"}, defaults)
+    assert changed == {"experiment.fmus": "native"}
+    assert command_line("spin", changed) == "sewfmu run spin --set experiment.fmus=native"
+    assert 'fmus = "native"' in scenario_toml(SPIN, changed)
+    with pytest.raises(sewfmu.Error, match=r"experiment\.fmus: .*'python' or 'native'"):
+        changed_values(str(spin), {"experiment.fmus": "rust"}, defaults)
+
+
 # --- where a run takes its FMUs from -------------------------------------------------------------
 def test_the_native_folder_is_the_builders():
     native = pytest.importorskip("sewfmu.scenarios.fmu_build.native")
@@ -186,17 +221,20 @@ def test_a_stale_or_missing_native_fmu_is_built_and_a_current_one_is_not(shaft_f
     _, python, _ = shaft_fmus
     built = []
 
-    def builder(name, dest, fmi=2):
+    def builder(name, dest, fmi, python_dir):
         built.append((name, Path(dest), fmi))
+        assert python_dir == default_fmu_dir(fmi, tmp_path)      # made from these Python FMUs
         return stand_in(python, Path(dest))
 
-    monkeypatch.setattr(up_to_date, "_native_builder", lambda: builder)
+    monkeypatch.setattr(up_to_date, "_build_native", builder)
+    # the C sources as they are now, whatever another session edits meanwhile
+    monkeypatch.setattr(up_to_date, "native_version", lambda now=native_version(): now)
     folder = native_fmu_dir(2, tmp_path)
     paths = up_to_date.fmus_for_names(["MainShaft"], tmp_path, kind="native")
     assert built == [("MainShaft", folder, 2)] and paths == {"MainShaft": folder / "MainShaft.fmu"}
     up_to_date.fmus_for_names(["MainShaft"], tmp_path, kind="native")
     assert len(built) == 1                                     # current: not built again
-    stand_in(python, folder, version=up_to_date.current_version() + ".native.000000000000")
+    stand_in(python, folder, version=up_to_date.native_version() + "0")
     up_to_date.fmus_for_names(["MainShaft"], tmp_path, kind="native")
     assert len(built) == 2                                     # other C sources: built again
     stand_in(python, folder, version=up_to_date.current_version())     # the Python FMU's own
