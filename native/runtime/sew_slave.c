@@ -361,9 +361,10 @@ static int refusal_of_set(const SewSlave *s, const SewVariable *v, double x, cha
         return -1;
     }
     if (!(x >= v->min && x <= v->max)) {
-        snprintf(why, SEW_WHY, "%s %s = %.6g %s is outside its range [%g, %g] %s: refused",
-                 v->causality == SEW_PARAMETER ? "parameter" : "input", v->name, x, v->unit,
-                 v->min, v->max, v->unit);
+        const char *gap = v->unit[0] ? " " : "";
+        snprintf(why, SEW_WHY, "%s %s = %.6g%s%s is outside its range [%g, %g]%s%s: refused",
+                 v->causality == SEW_PARAMETER ? "parameter" : "input", v->name, x, gap, v->unit,
+                 v->min, v->max, gap, v->unit);
         return -1;
     }
     return 0;

@@ -29,7 +29,7 @@ def _refused(inst: Instance, call, *args, reason: str) -> None:
     assert caught.value.status == ERROR
     status, line = inst.lines[-1]
     assert status == ERROR
-    assert line.startswith("shaft1 (MainShaft): "), line
+    assert line.startswith(f"shaft1 ({inst.md.modelName}): "), line
     assert reason in line, line
 
 
@@ -125,3 +125,42 @@ def test_a_step_the_instance_cannot_take_before_initialization_is_refused(shaft)
 def test_outputs_read_before_initialization_are_the_models(shaft):
     _set(shaft, [shaft.vr["omega0"]], [50.0])
     assert shaft.outputs(["phi", "omega", "epsilon"]) == [0.0, 50.0, 0.0]
+
+
+@pytest.fixture(params=VERSIONS, ids=lambda fmi: f"fmi{fmi}")
+def punch(request, native_fmu):
+    fmi = request.param
+    inst = Instance(native_fmu("PunchContact", fmi), fmi, name="shaft1")
+    yield inst
+    inst.free()
+
+
+@pytest.mark.slow
+def test_integer_and_boolean_variables_are_refused_as_the_reals_are(punch):
+    fmi2 = punch.fmi == 2
+    set_int = punch.fmu.setInteger if fmi2 else punch.fmu.setInt32
+    get_int = punch.fmu.getInteger if fmi2 else punch.fmu.getInt32
+    vr = punch.vr["compression_only"]
+    assert list(get_int([vr])) == [0]
+    _refused(punch, set_int, [vr], [2], reason="outside its range [0, 1]")
+    set_int([vr], [1])
+    assert list(get_int([vr])) == [1]
+    _refused(punch, _set, punch, [vr], [1.0], reason="compression_only is not a Real")
+    _refused(punch, punch.fmu.setBoolean, [punch.vr["contact"]], [True],
+             reason="contact is an output")
+    assert list(punch.fmu.getBoolean([punch.vr["contact"]])) == [False]
+    _refused(punch, punch.fmu.getBoolean, [punch.vr["y"]], reason="no such variable")
+    get_string = punch.fmu.getString
+    _refused(punch, get_string, [vr], reason="no such variable")
+    punch.start()
+    _refused(punch, set_int, [vr], [0], reason="parameter compression_only is fixed")
+
+
+@pytest.mark.slow
+def test_an_input_outside_its_range_is_refused_and_the_step_goes_on(punch):
+    punch.start()
+    xi = punch.vr["xi"]
+    _refused(punch, _set, punch, [xi], [5.0], reason="input xi = 5 m is outside its range")
+    _refused(punch, _set, punch, [xi], [math.nan], reason="not a finite number")
+    punch.fmu.doStep(0.0, 1e-5)
+    assert all(math.isfinite(x) for x in punch.outputs(["y", "y_dot"]))
