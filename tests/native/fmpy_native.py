@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import io
 import zipfile
-from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,6 @@ from fmpy.fmi2 import (
     fmi2CallbackLoggerTYPE,
 )
 from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
-from fmpy.logging import addLoggerProxy
 
 LS_REF = "extra/org.fmi-standard.fmi-ls-ref"
 ERROR = 3          # fmi2Error, fmi3Error
@@ -42,7 +40,9 @@ class Instance:
             self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
             self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            addLoggerProxy(byref(self._callbacks))    # fmpy's C proxy formats the varargs
+            # no fmpy.logging.addLoggerProxy: it keeps one logger for the whole process, so
+            # the lines of two instances would meet in the last one's list; a sewfmu line is
+            # the format itself (no '%'), so the fixed arguments are all there is to read
             self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
         else:
             self.fmu = FMU3Slave(**kwargs)

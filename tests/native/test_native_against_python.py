@@ -80,3 +80,27 @@ def test_random_input_histories_give_the_python_fmus_outputs(native_fmu, name, f
     finally:
         native.free()
         python.free()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_step_the_model_cannot_take_is_discarded_as_by_the_python_fmu(native_fmu, fmi):
+    native_path = native_fmu("PunchContact", fmi)
+    python_path = native_path.parent.parent / f"python{fmi}" / native_path.name
+    native, python = Instance(native_path, fmi, name="n"), Instance(python_path, fmi, name="p")
+    outputs = ["y", "y_dot", "F2", "F2_max"]
+    try:
+        for inst in (native, python):
+            inst.start()
+            inst.fmu.doStep(0.0, 1e-4)
+        # far too long for the switch search (StepTooLong): Discard, the instance as it was
+        assert _step(native, 1e-4, 100.0) == _step(python, 1e-4, 100.0) == 2
+        status, line = native.lines[-1]
+        assert status == 2 and "discarded: a step of 100 s needs" in line, line
+        assert line.split("discarded: ")[1] == python.lines[-1][1].split("discarded: ")[1]
+        for inst in (native, python):
+            inst.fmu.doStep(1e-4, 1e-4)
+        assert native.outputs(outputs) == python.outputs(outputs)
+    finally:
+        native.free()
+        python.free()

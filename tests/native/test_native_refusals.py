@@ -164,3 +164,15 @@ def test_an_input_outside_its_range_is_refused_and_the_step_goes_on(punch):
     _refused(punch, _set, punch, [xi], [math.nan], reason="not a finite number")
     punch.fmu.doStep(0.0, 1e-5)
     assert all(math.isfinite(x) for x in punch.outputs(["y", "y_dot"]))
+
+
+@pytest.mark.slow
+def test_fmi3s_time_is_read_and_never_set(native_fmu):
+    inst = Instance(native_fmu("MainShaft", 3), 3, name="shaft1")
+    try:
+        inst.start(0.5)
+        inst.fmu.doStep(0.5, 1e-3)
+        assert list(inst.fmu.getFloat64([0])) == [0.5 + 1e-3]
+        _refused(inst, _set, inst, [0], [1.0], reason="time is the independent variable")
+    finally:
+        inst.free()
