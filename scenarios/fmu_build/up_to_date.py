@@ -46,6 +46,7 @@ def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None) -> P
     """native.build_native_fmu (a C compiler's builder: imported only to build); a native FMU
     that cannot be made here (no builder, a model without its C twin yet) is one line."""
     try:
+        # the native builder (C compilers, the FMUs' C sources): only to build one
         from sewfmu.scenarios.fmu_build.native import build_native_fmu
     except ImportError as err:
         raise ScenarioError(f"experiment.fmus = \"native\": this sewfmu cannot build native "
