@@ -58,8 +58,8 @@ RUNTIME_FILES = ("sew_model.h", "sew_slave.h", "sew_slave.c", "sew_state.c")
 FMI_FILES = {
     2: ("fmi2_glue.c", "fmi2/fmi2Functions.h", "fmi2/fmi2FunctionTypes.h",
         "fmi2/fmi2TypesPlatform.h"),
-    3: ("fmi3_glue.c", "fmi3/fmi3Functions.h", "fmi3/fmi3FunctionTypes.h",
-        "fmi3/fmi3PlatformTypes.h"),
+    3: ("fmi3_glue.c", "fmi3_glue.h", "fmi3_unsupported.c", "fmi3/fmi3Functions.h",
+        "fmi3/fmi3FunctionTypes.h", "fmi3/fmi3PlatformTypes.h"),
 }
 _INCLUDE = re.compile(rb'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 

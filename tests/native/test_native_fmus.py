@@ -5,6 +5,7 @@ other FMU and FMI 3.0 are slow (a build each)."""
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import zipfile
@@ -14,7 +15,7 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
-from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS
+from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS, RUNTIME
 from tests.native.fmpy_native import Instance, reference_of, worst_relative
 
 FMUCHECK = Path(os.environ.get("SEWFMU_FMUCHECK", "/work/shared/tools/fmuCheck.linux64"))
@@ -150,6 +151,30 @@ def test_the_binaries_need_no_python_and_no_mingw_runtime(native_fmu, name, fmi,
                if "DLL Name:" in line]
     assert imports, "the DLL imports nothing?"
     assert not [d for d in imports if "python" in d or "libgcc" in d or "winpthread" in d], imports
+    # it exports the FMI functions and nothing else
+    table = subprocess.run([objdump, "-p", str(dll)], capture_output=True, text=True,
+                           check=True).stdout
+    exported = re.findall(r"^\s*\[\s*\d+\] (\w+)$", table, re.MULTILINE)
+    assert len(exported) > 40 and all(e.startswith(f"fmi{fmi}") for e in exported), exported
+
+
+@pytest.mark.parametrize("name, fmi", _cases())
+def test_the_linux_binary_exports_every_function_of_its_fmi_version(native_fmu, name, fmi,
+                                                                  tmp_path):
+    if not shutil.which("nm"):
+        pytest.skip("no nm: the binary's symbols are not read")
+    header = (RUNTIME / f"fmi{fmi}" / f"fmi{fmi}Functions.h").read_text()
+    declared = set(re.findall(rf"FMI{fmi}_Export\s+fmi{fmi}\w+TYPE\s+(fmi{fmi}\w+);", header))
+    folder = "linux64" if fmi == 2 else "x86_64-linux"
+    with zipfile.ZipFile(native_fmu(name, fmi)) as archive:
+        so = tmp_path / f"{name}.so"
+        so.write_bytes(archive.read(f"binaries/{folder}/{name}.so"))
+    symbols = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True,
+                             text=True, check=True).stdout.split()
+    exported = {s for s in symbols if s.startswith(f"fmi{fmi}")}
+    assert len(declared) > 40 and declared <= exported, sorted(declared - exported)
+    # nothing else: the runtime's own functions stay inside (several FMUs in one process)
+    assert not [s for s in symbols if s.startswith(("sew_", "SEW_"))]
 
 
 @pytest.mark.interop
