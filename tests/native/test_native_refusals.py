@@ -5,6 +5,7 @@ after initialization, a garbled serialized state; and the instance is left as it
 from __future__ import annotations
 
 import math
+import struct
 
 import pytest
 from fmpy.fmi1 import FMICallException
@@ -176,3 +177,46 @@ def test_fmi3s_time_is_read_and_never_set(native_fmu):
         _refused(inst, _set, inst, [0], [1.0], reason="time is the independent variable")
     finally:
         inst.free()
+
+
+def _fnv1a(data: bytes) -> int:
+    h = 14695981039346656037
+    for byte in data:
+        h = ((h ^ byte) * 1099511628211) % 2 ** 64
+    return h
+
+
+def _payload_at(data: bytes) -> int:
+    """Where the payload of a serialized state begins (native/runtime/sew_state.c's layout:
+    magic, model name, token, payload size, payload, checksum)."""
+    at = 8
+    for _ in range(2):
+        at += 4 + struct.unpack_from("<I", data, at)[0]
+    return at + 4
+
+
+@pytest.mark.parametrize("forgery", ["parameter out of range", "time not finite", "mode",
+                                     "reason too long"])
+def test_a_forged_state_with_a_good_checksum_is_refused(shaft, forgery):
+    shaft.start()
+    shaft.fmu.doStep(0.0, 1e-3)
+    fmi2 = shaft.fmi == 2
+    state = (shaft.fmu.getFMUstate if fmi2 else shaft.fmu.getFMUState)()
+    data = bytearray((shaft.fmu.serializeFMUstate if fmi2 else shaft.fmu.serializeFMUState)(
+        state))
+    at = _payload_at(data)                     # phase, initialized, time, elapsed, values...
+    if forgery == "parameter out of range":
+        struct.pack_into("<d", data, at + 18, 5000.0)          # omega0
+        reason = "omega0 = 5000 is outside its declared range"
+    elif forgery == "time not finite":
+        struct.pack_into("<d", data, at + 2, math.nan)
+        reason = "its time is not a finite number"
+    elif forgery == "mode":
+        data[at] = 7
+        reason = "its mode is not one of this FMU's"
+    else:
+        struct.pack_into("<H", data, at + 18 + 8 * 2, 5000)    # after MainShaft's 2 values
+        reason = "garbled"
+    struct.pack_into("<Q", data, len(data) - 8, _fnv1a(bytes(data[:-8])))
+    deserialize = shaft.fmu.deSerializeFMUstate if fmi2 else shaft.fmu.deserializeFMUState
+    _refused(shaft, deserialize, bytes(data), reason=reason)
