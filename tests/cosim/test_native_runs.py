@@ -105,3 +105,26 @@ def test_a_native_refusal_is_the_python_discards_one_line(master, fmi, fmu_dir, 
     # refused when the value is set: at the end of the step that reached it (Jacobi, the
     # iterative master), not at the start of the next step as the Python FMU's doStep does
     assert native_t <= python_t <= native_t + 1e-5 * (1 + 1e-9) or master == "adaptive", told
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_parameter_refused_at_its_setter_is_one_line_too(fmi, fmu_dir, fmu3_dir):
+    """A NaN parameter past the scenario's checks (a Master given it directly): the Python FMU
+    refuses it at exitInitializationMode, the native one at its setter (fmpy raises
+    FMICallException on the Error); both one line naming the instance, the phase and why."""
+    from sewfmu.scenarios.cosim.master import Master
+    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
+
+    told = {}
+    for kind in ("python", "native"):
+        sc = sewfmu.load("punch_drive", set={"experiment.revolutions": 1, "experiment.fmi": fmi,
+                                             "experiment.fmus": kind})
+        sc.instances["punch"].parameters["m"] = float("nan")
+        with pytest.raises(sewfmu.Error) as err:
+            Master(sc, fmus_for(sc, fmu_dir)).run()
+        told[kind] = str(err.value)
+    for text in told.values():
+        assert "\n" not in text and text.startswith(
+            "punch failed during initialization at t = 0 s: punch (PunchContact): "), text
+        assert "parameter m" in text and "nan" in text, text
