@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import zipfile
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
@@ -192,3 +193,33 @@ def test_fmucheck_runs_the_native_fmu_with_nothing_of_python(native_fmu, name, f
     assert "\t0 Error(s)" in text, text
     rows = (tmp_path / "out.csv").read_text().splitlines()
     assert len(rows) > 2 and "nan" not in rows[-1].lower(), rows[-3:]
+
+
+@SLOW
+@pytest.mark.parametrize("name", ["MainShaft", "PunchContact"])
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_sources_it_ships_compile_into_a_binary_with_the_same_numbers(native_fmu, name, fmi,
+                                                                         tmp_path):
+    if not shutil.which("gcc"):
+        pytest.skip("no gcc")
+    fmu = native_fmu(name, fmi)
+    with zipfile.ZipFile(fmu) as archive:
+        archive.extractall(tmp_path)
+    sources = tmp_path / "sources"
+    if fmi == 2:
+        listed = [f.get("name") for f in ElementTree.parse(tmp_path / "modelDescription.xml")
+                  .getroot().iter("File")]
+    else:
+        listed = [f.get("name") for f in ElementTree.parse(sources / "buildDescription.xml")
+                  .getroot().iter("SourceFile")]
+    assert sorted(listed) == sorted(p.name for p in sources.glob("*.c"))
+    binary = tmp_path / "binaries" / ("linux64" if fmi == 2 else "x86_64-linux") / f"{name}.so"
+    binary.unlink()
+    subprocess.run(["gcc", "-std=c99", "-O2", "-ffp-contract=off", "-shared", "-fPIC",
+                    f"-I{sources}", *(str(sources / f) for f in listed), "-o", str(binary),
+                    "-lm"], check=True)
+    columns, reference = reference_of(_python_fmu(fmu, fmi), name)
+    step = float(Instance.describe(fmu).defaultExperiment.stepSize)
+    result = simulate_fmu(str(tmp_path), output_interval=step)
+    for i, column in enumerate(columns):
+        assert worst_relative(result[column].astype(float), reference[:, i]) <= 1e-9, column
