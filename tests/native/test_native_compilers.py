@@ -67,3 +67,23 @@ def test_a_build_without_any_compiler_is_refused_in_lines_naming_them(monkeypatc
     _no_compilers(monkeypatch, "windows", "linux")
     with pytest.raises(native_compile.NoCompiler, match="apt install mingw-w64"):
         build_native_fmu("MainShaft", tmp_path / "native", python_dir=tmp_path / "python")
+
+
+@pytest.mark.slow
+def test_without_mingw_zig_builds_the_windows_binary(monkeypatch, tmp_path):
+    # zig's first run builds its C library for the target (minutes), later ones take seconds
+    if native_compile._zig() is None:
+        pytest.skip("ziglang is not installed (pip install 'sewfmu[native]')")
+    real = shutil.which
+    monkeypatch.setattr(native_compile.shutil, "which",
+                        lambda name: None if "mingw" in name else real(name))
+    fmu = build_native_fmu("MainShaft", tmp_path / "native", python_dir=tmp_path / "python")
+    with zipfile.ZipFile(fmu) as archive:
+        dll = archive.read("binaries/win64/MainShaft.dll")
+    assert dll[:2] == b"MZ"
+    (tmp_path / "M.dll").write_bytes(dll)
+    objdump = shutil.which("x86_64-w64-mingw32-objdump") or shutil.which("objdump")
+    if objdump:
+        table = subprocess.run([objdump, "-p", str(tmp_path / "M.dll")], capture_output=True,
+                               text=True).stdout.lower()
+        assert "python" not in table and "libgcc" not in table and "winpthread" not in table
