@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import sys
 import zipfile
+from pathlib import Path
 
 import pytest
 
 from sewfmu.scenarios.fmu_build import native_compile
-from sewfmu.scenarios.fmu_build.native import MODELS, RUNTIME, build_native_fmu
+from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS, RUNTIME, build_native_fmu
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-ffp-contract=off"]
 FILES = [RUNTIME / "sew_slave.c", RUNTIME / "sew_state.c", MODELS / "shaft.c"]
@@ -87,3 +89,14 @@ def test_without_mingw_zig_builds_the_windows_binary(monkeypatch, tmp_path):
         table = subprocess.run([objdump, "-p", str(tmp_path / "M.dll")], capture_output=True,
                                text=True).stdout.lower()
         assert "python" not in table and "libgcc" not in table and "winpthread" not in table
+
+
+@pytest.mark.slow
+def test_sewfmu_build_native_writes_the_native_folder(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "sewfmu", "build", "--native", "--fmi", "3",
+                           "--dest", str(tmp_path)], capture_output=True, text=True,
+                          timeout=900)
+    assert done.returncode == 0, done.stderr
+    built = sorted(Path(line).name for line in done.stdout.split())
+    assert built == sorted(f"{name}.fmu" for name in MODEL_FILES)
+    assert sorted(p.name for p in (tmp_path / "native" / "fmi3").glob("*.fmu")) == built
