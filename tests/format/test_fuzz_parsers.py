@@ -45,7 +45,7 @@ def test_any_tables_as_a_scenario(data):
 
 @FUZZ
 @given(st.dictionaries(st.sampled_from(["step", "master", "revolutions", "stop_time", "shaft",
-                                        "tolerance", "acceleration", "record_every", "fmi",
+                                        "tolerance", "acceleration", "record_every", "fmi", "fmus",
                                         "accuracy", "accept_error"]), scalars, max_size=6))
 def test_any_experiment_table(experiment):
     data = {"instances": {"shaft": {"fmu": "MainShaft"}}, "experiment": experiment}
