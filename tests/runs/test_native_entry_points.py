@@ -49,6 +49,8 @@ def test_run_and_its_summary(fmu_dir_is, tmp_path):
 
 
 def test_sweep_in_worker_processes(fmu_dir_is):
+    # (the workers fork from a server that keeps the SEWFMU_FMU_DIR it started with: in a session
+    # whose earlier sweep started it, they find their native FMUs there)
     sweep = sewfmu.sweep("punch_drive", grid={"shaft.omega0": [200.0, 250.0]}, set=NATIVE,
                          workers=2)
     assert [r["status"] for r in sweep.rows] == ["ok", "ok"]
@@ -85,3 +87,21 @@ def test_export_fmu_refuses_a_native_container_with_python_inside(fmu_dir_is, tm
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "needs no Python" in err and "carries Python" in err
     assert not out.exists()
+
+
+def test_a_sweep_point_on_native_fmus_is_not_one_on_python_fmus(fmu_dir_is, python_fmus):
+    """A sweep resumed in the same folder with the other build runs its points again: the
+    build is in a point's identity (the experiment's keys and the FMUs' versions), and the
+    scenario the workers receive carries it."""
+    import pickle
+
+    from sewfmu.scenarios.runs.sweep import settings_of
+
+    native = sewfmu.load("punch_drive", set=NATIVE)
+    python = sewfmu.load("punch_drive", set={**NATIVE, "experiment.fmus": "python"})
+    assert pickle.loads(pickle.dumps(native)).fmus == "native"
+    folder = native_fmu_dir(2, fmu_dir_is)
+    native_paths = {p.stem: folder / p.name for p in python_fmus}
+    python_paths = {p.stem: p for p in python_fmus}
+    assert settings_of(native, native_paths) != settings_of(python, python_paths)
+    assert settings_of(native, python_paths) != settings_of(python, python_paths)
