@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 import sewfmu
+from sewfmu.app.values import changed_values, command_line, inputs_of, scenario_toml
 from sewfmu.cli import main
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
 from sewfmu.scenarios.cosim.master import Master
@@ -25,6 +26,7 @@ from sewfmu.scenarios.fmu_build.native_current import (
     native_version,
 )
 from sewfmu.scenarios.fmu_build.sources import default_fmu_dir, fmu_version
+from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS, experiment_of
 from sewfmu.scenarios.format.parse import from_dict
 from sewfmu.scenarios.format.scenario import Instance, Scenario
 from sewfmu.scenarios.format.values import ScenarioError
@@ -123,7 +125,6 @@ def test_the_command_line_refuses_it_in_one_line(capsys, tmp_path, value):
 
 
 def test_the_key_is_listed_with_the_others():
-    from sewfmu.scenarios.format.experiment import EXPERIMENT_KEYS, experiment_of
 
     assert "fmus" in EXPERIMENT_KEYS
     assert experiment_of(sewfmu.load("punch_drive", set={"experiment.fmus": "native"})
@@ -140,7 +141,6 @@ step = 0.001
 
 
 def test_the_page_offers_it_and_reads_it_as_a_run_does(shaft_fmus, tmp_path, monkeypatch):
-    from sewfmu.app.values import changed_values, command_line, inputs_of, scenario_toml
 
     monkeypatch.setenv("SEWFMU_FMU_DIR", str(shaft_fmus[0]))        # the stand-in's folder
     spin = tmp_path / "spin.toml"

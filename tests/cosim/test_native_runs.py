@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import sewfmu
+from sewfmu.scenarios.cosim.master import Master
 from sewfmu.scenarios.fmu_build.native_current import native_fmu_dir
+from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 
 RTOL = 1e-9
 OFF = {"experiment.accuracy": "off"}        # the figures only: no coarser run beside
@@ -113,8 +115,6 @@ def test_a_parameter_refused_at_its_setter_is_one_line_too(fmi, fmu_dir, fmu3_di
     """A NaN parameter past the scenario's checks (a Master given it directly): the Python FMU
     refuses it at exitInitializationMode, the native one at its setter (fmpy raises
     FMICallException on the Error); both one line naming the instance, the phase and why."""
-    from sewfmu.scenarios.cosim.master import Master
-    from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 
     told = {}
     for kind in ("python", "native"):

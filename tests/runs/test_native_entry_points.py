@@ -4,6 +4,7 @@ page's runs are sewfmu.run's: tests/cosim/test_native_fmus.py offers it the sett
 folder holds only native FMUs (stand-ins: Python FMUs copied into fmus/native/ with the native
 version stamped in, tests/cosim/test_native_fmus.py), so a command that took the Python FMUs
 would build them beside: none may be there afterwards."""
+import pickle
 import zipfile
 
 import pytest
@@ -13,6 +14,7 @@ from sewfmu.cli import main
 from sewfmu.scenarios.fmu_build import up_to_date
 from sewfmu.scenarios.fmu_build.build import build_fmu
 from sewfmu.scenarios.fmu_build.native_current import native_fmu_dir, native_version
+from sewfmu.scenarios.runs.sweep import settings_of
 from tests.cosim.test_native_fmus import stand_in
 
 PUNCH = ("MainShaft", "PunchLinkage", "PunchContact")
@@ -93,10 +95,6 @@ def test_a_sweep_point_on_native_fmus_is_not_one_on_python_fmus(fmu_dir_is, pyth
     """A sweep resumed in the same folder with the other build runs its points again: the
     build is in a point's identity (the experiment's keys and the FMUs' versions), and the
     scenario the workers receive carries it."""
-    import pickle
-
-    from sewfmu.scenarios.runs.sweep import settings_of
-
     native = sewfmu.load("punch_drive", set=NATIVE)
     python = sewfmu.load("punch_drive", set={**NATIVE, "experiment.fmus": "python"})
     assert pickle.loads(pickle.dumps(native)).fmus == "native"
