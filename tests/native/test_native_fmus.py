@@ -12,9 +12,11 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
+import fmpy
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
+from fmpy.validation import validate_fmu
 
 from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS, RUNTIME
 from tests.native.fmpy_native import Instance, reference_of, worst_relative
@@ -76,6 +78,13 @@ def test_the_native_fmu_carries_the_python_fmus_reference_and_declarations(nativ
     experiment = ("startTime", "stopTime", "stepSize")
     assert [getattr(native_md.defaultExperiment, k) for k in experiment] == \
         [getattr(python_md.defaultExperiment, k) for k in experiment]
+    assert validate_fmu(str(fmu)) == []
+    if fmi == 3:
+        lxml = pytest.importorskip("lxml.etree")
+        schema = Path(fmpy.__file__).parent / "schema" / "fmi3" / "fmi3BuildDescription.xsd"
+        with zipfile.ZipFile(fmu) as archive:
+            build = lxml.fromstring(archive.read("sources/buildDescription.xml"))
+        assert lxml.XMLSchema(lxml.parse(str(schema))).validate(build)
     assert native_md.coSimulation.canGetAndSetFMUstate
     assert native_md.coSimulation.canSerializeFMUstate
     assert not native_md.coSimulation.needsExecutionTool
