@@ -101,9 +101,11 @@ class Wine:
                                                err.read().decode("utf-8", "replace"))
 
     def close(self) -> None:
+        """Stop the server and its services, and remove the prefix (700 MB)."""
         if self.server:
             subprocess.run([self.server, "-k"], env=self.env, timeout=60,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        shutil.rmtree(self.env["WINEPREFIX"], ignore_errors=True)
 
 
 def windows_path(path: Path) -> str:
