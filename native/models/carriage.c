@@ -1,18 +1,16 @@
 /* The coordinate device's carriage: the start-stop table drive (CarriageDrive) and the carriage
    on its guide cantilever, a 2-DOF Ritz model stepped mode by mode (CarriageModal).
    The C twins of components/carriage.py's models as components/carriage_fmu.py's slaves call
-   them, with components/parameters.py's checks and messages (units.py: the hints' factors).
+   them, their parameters checked by parameters.c (components/parameters.py's twin).
    Every expression keeps the Python's operations and their order (x ** n is pow, as CPython's
    float power), so that the numbers agree to the last bit where libm is the same. */
 /* twin-of: components/carriage.py sha256:314624d9c448430f */
 /* twin-of: components/carriage_fmu.py sha256:aa68cca395bba5b0 */
-/* twin-of: components/parameters.py sha256:b9d6335db0d8c591 */
-/* twin-of: components/units.py sha256:c0938e7e938a7907 */
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 
 #include "oscillator.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 #define PI 3.141592653589793            /* math.pi (M_PI is not C99) */
@@ -54,147 +52,13 @@ static int py_sqrt(double x, double *root, char *why)
     return 0;
 }
 
-/* the digits of a p-digit mantissa m (10^(p-1) <= m < 10^p, or m = 0) */
-static void mantissa_digits(unsigned long long m, int p, char *digits)
-{
-    int i;
-    for (i = p - 1; i >= 0; i--, m /= 10) digits[i] = (char)('0' + (int)(m % 10));
-    digits[p] = '\0';
-}
-
-/* Python's repr of a float: the shortest digits that read back as x (of as many digits, the
-   closest to x: printf's rounding, or its neighbour on x's other side where a power of two
-   makes the gap below x half the gap above), in fixed notation for a decimal point at
-   -4 < decpt <= 16, else d.ddde+XX; a whole number ends in ".0" */
-static void py_repr(double x, char *out, size_t size)
-{
-    char buf[48], digits[20], text[48];
-    double ax = fabs(x);
-    unsigned long long m = 0, low = 1, high;
-    int p, n, e = 0, decpt, k = 0, i;
-    if (isnan(x)) { snprintf(out, size, "nan"); return; }
-    if (isinf(x)) { snprintf(out, size, x > 0 ? "inf" : "-inf"); return; }
-    for (p = 1; p <= 17; p++, low *= 10) {
-        const char *s;
-        double back;
-        high = low * 10;                               /* m lies in [10^(p-1), 10^p) */
-        snprintf(buf, sizeof buf, "%.*e", p - 1, ax);
-        for (m = 0, s = buf; *s != 'e'; s++)
-            if (*s != '.') m = 10 * m + (unsigned long long)(*s - '0');
-        e = atoi(s + 1);
-        back = strtod(buf, NULL);
-        if (back == ax) break;
-        if (back < ax) {                               /* the neighbour above */
-            if (++m == high) { m = low; e++; }
-        } else if (m == low) {                         /* below, across a power of ten */
-            m = high - 1;
-            e--;
-        } else {
-            m--;
-        }
-        mantissa_digits(m, p, digits);
-        snprintf(buf, sizeof buf, "%se%d", digits, e - p + 1);
-        if (strtod(buf, NULL) == ax) break;
-    }
-    if (p > 17) p = 17;                                /* (never: 17 digits always read back) */
-    mantissa_digits(m, p, digits);
-    n = p;
-    while (n > 1 && digits[n - 1] == '0') n--;
-    decpt = e + 1;
-    if (signbit(x)) text[k++] = '-';
-    if (decpt <= -4 || decpt > 16) {
-        text[k++] = digits[0];
-        if (n > 1) text[k++] = '.';
-        for (i = 1; i < n; i++) text[k++] = digits[i];
-        snprintf(text + k, sizeof text - (size_t)k, "e%c%02d", e < 0 ? '-' : '+', abs(e));
-    } else {
-        if (decpt <= 0) {
-            text[k++] = '0';
-            text[k++] = '.';
-            for (i = decpt; i < 0; i++) text[k++] = '0';
-        }
-        for (i = 0; i < n || i < decpt; i++) {
-            if (i == decpt && decpt > 0) text[k++] = '.';
-            text[k++] = i < n ? digits[i] : '0';
-        }
-        if (decpt >= n) {
-            text[k++] = '.';
-            text[k++] = '0';
-        }
-        text[k] = '\0';
-    }
-    snprintf(out, size, "%s", text);
-}
-
-/* --- parameters.py's check_value ---------------------------------------------------------- */
-
-typedef enum { POSITIVE, NONNEGATIVE, FRACTION } Allowed;
-
-typedef struct {
-    const char *name;
-    const char *unit;
-    Allowed allowed;
-    double scale;            /* MACHINE_SCALE of the unit, 0 where it has none */
-    const char *meant;       /* _MEANT: how a too large value is usually meant, or NULL */
-    double factor;           /* DISPLAY_UNITS[unit][meant] */
-} ParamInfo;
-
-/* check_value for a float: 0, or -1 with ParameterError's text in why */
-static int check_value(const ParamInfo *info, double value, char *why)
-{
-    static const char *const range_text[] = {"> 0", ">= 0", "in (0, 1)"};
-    char text[40];
-    int ok;
-    py_repr(value, text, sizeof text);
-    if (!isfinite(value)) {
-        snprintf(why, SEW_WHY, "parameter %s: must be finite, got %s", info->name, text);
-        return -1;
-    }
-    ok = info->allowed == POSITIVE ? value > 0 :
-         info->allowed == NONNEGATIVE ? value >= 0 : (0 < value && value < 1);
-    if (!ok) {
-        snprintf(why, SEW_WHY, "parameter %s: must be %s %s, got %s", info->name,
-                 range_text[info->allowed], info->unit, text);
-        return -1;
-    }
-    /* the declared bounds: (0, 1) for a fraction (already held), else (0, the unit's scale) */
-    if (info->allowed != FRACTION && info->scale > 0 && !(0.0 <= value && value <= info->scale)) {
-        char hint[128] = "";
-        if (info->meant != NULL && 0.0 <= value / info->factor
-                && value / info->factor <= info->scale)
-            snprintf(hint, sizeof hint, " (meant in %s? give the unit: \"%g %s\")", info->meant,
-                     value, info->meant);
-        snprintf(why, SEW_WHY, "parameter %s: must be within [%g, %g] %s in a sewing machine's "
-                 "mechanism, got %g%s", info->name, 0.0, info->scale, info->unit, value, hint);
-        return -1;
-    }
-    return 0;
-}
-
-static int validate(const ParamInfo *infos, int n, const double *p, char *why)
-{
-    int i;
-    for (i = 0; i < n; i++)
-        if (check_value(&infos[i], p[i], why) != 0) return -1;
-    return 0;
-}
-
-/* MACHINE_SCALE and the display factors, as parameters.py and units.py write them */
-#define SCALE_M 1.0
-#define SCALE_KG 50.0
-#define SCALE_RAD (2 * PI)
-#define SCALE_NM2 1e7
-#define SCALE_KGM2 10.0
-#define NO_SCALE 0.0
-
 /* === CarriageDrive ============================================================================ */
 
 enum { D_STITCH, D_WINDOW, D_PHI_START };              /* CarriageDriveParams' fields */
 
-static const ParamInfo DRIVE_PARAMS[] = {
-    {"stitch_length", "m", POSITIVE, SCALE_M, "mm", 1e3},
-    {"window", "1", FRACTION, NO_SCALE, NULL, 0.0},
-    {"phi_start", "rad", NONNEGATIVE, SCALE_RAD, "deg", 180.0 / PI},
+static const SewParamInfo DRIVE_PARAMS[] = {
+    SEW_PARAM("stitch_length", "m", SEW_POSITIVE), SEW_PARAM("window", "1", SEW_FRACTION),
+    SEW_PARAM("phi_start", "rad", SEW_NONNEGATIVE),
 };
 
 /* CarriageDrive._law: position and its first three derivatives with respect to phi; -1 where
@@ -238,7 +102,7 @@ static int drive_law(const double *p, double phi, double law[4], char *why)
 static int drive_build(const double *p, double *derived, char *why)
 {
     double law[4];
-    if (validate(DRIVE_PARAMS, 3, p, why) != 0) return -1;
+    if (sew_validate(DRIVE_PARAMS, 3, p, why) != 0) return -1;
     if (drive_law(p, 0.0, law, why) != 0) return -1;
     derived[0] = law[0];                 /* x0: x = 0 at phi = 0 */
     return 0;
@@ -268,14 +132,11 @@ const SewModel SEW_MODEL_CarriageDrive = {
 
 enum { C_L, C_A, C_EJ, C_M_N, C_M_K, C_J_C, C_ZETA };  /* CarriageParams' fields */
 
-static const ParamInfo CARRIAGE_PARAMS[] = {
-    {"l", "m", POSITIVE, SCALE_M, "mm", 1e3},
-    {"a", "m", POSITIVE, SCALE_M, "mm", 1e3},
-    {"EJ", "N.m2", POSITIVE, SCALE_NM2, NULL, 0.0},
-    {"m_n", "kg", POSITIVE, SCALE_KG, "g", 1e3},
-    {"m_k", "kg", POSITIVE, SCALE_KG, "g", 1e3},
-    {"J_c", "kg.m2", POSITIVE, SCALE_KGM2, NULL, 0.0},
-    {"zeta", "1", NONNEGATIVE, NO_SCALE, NULL, 0.0},
+static const SewParamInfo CARRIAGE_PARAMS[] = {
+    SEW_PARAM("l", "m", SEW_POSITIVE), SEW_PARAM("a", "m", SEW_POSITIVE),
+    SEW_PARAM("EJ", "N.m2", SEW_POSITIVE), SEW_PARAM("m_n", "kg", SEW_POSITIVE),
+    SEW_PARAM("m_k", "kg", SEW_POSITIVE), SEW_PARAM("J_c", "kg.m2", SEW_POSITIVE),
+    SEW_PARAM("zeta", "1", SEW_NONNEGATIVE),
 };
 
 /* derived: 2x2 matrices as rows (m[2*i + j]), vectors as pairs */
@@ -396,10 +257,10 @@ static int carriage_build(const double *p, double *d, char *why)
     double det;
     char l_text[40], a_text[40];
     int i;
-    if (validate(CARRIAGE_PARAMS, 7, p, why) != 0) return -1;
+    if (sew_validate(CARRIAGE_PARAMS, 7, p, why) != 0) return -1;
     if (!(p[C_A] < p[C_L])) {
-        py_repr(p[C_L], l_text, sizeof l_text);
-        py_repr(p[C_A], a_text, sizeof a_text);
+        sew_py_repr(p[C_L], l_text, sizeof l_text);
+        sew_py_repr(p[C_A], a_text, sizeof a_text);
         snprintf(why, SEW_WHY, "parameter a: must lie on the cantilever, 0 < a < l = %s m, "
                  "got %s", l_text, a_text);
         return -1;

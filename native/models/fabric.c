@@ -5,12 +5,9 @@
    a step the punch's extrapolated parabola, its contact switches and the largest F2 on it.
    The same operations in the same order as the Python, and Python's max(a, b) (b if b > a
    else a), so that the numbers agree to the last bit. */
-#ifndef __USE_MINGW_ANSI_STDIO
-#define __USE_MINGW_ANSI_STDIO 1     /* C99 printf (%g's two-digit exponent) on Windows */
-#endif
 #include <math.h>
 
-#include "punch_parameters.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 /* sub-intervals of the step's switch search; the bisection's resolution */
@@ -22,8 +19,7 @@ enum { S_F2_MAX, S_T_SWITCH, N_STATE };          /* FabricSlave's _F2_max, _t_sw
 enum { U_Y, U_Y_DOT, U_Y_DDOT };                 /* the punch's y, y', y'' */
 
 static const SewParamInfo FABRIC_PARAMS[N_PARAMS] = {
-    {"c2", "N/m", SEW_POSITIVE, SEW_SCALE_N_PER_M, NULL, 0.0, 0, {0}},
-    {"b2", "N.s/m", SEW_NONNEGATIVE, SEW_SCALE_NS_PER_M, NULL, 0.0, 0, {0}},
+    SEW_PARAM("c2", "N/m", SEW_POSITIVE), SEW_PARAM("b2", "N.s/m", SEW_NONNEGATIVE),
 };
 
 /* Python's max(a, b): a unless b is larger */

@@ -5,14 +5,11 @@
    and the feed-bar lever 5 that carries the feed-dog point M. The C twin of components/feed.py's
    FeedLinkage; its row is FeedLinkageSlave's outputs (components/feed_fmu.py). Stateless, and
    nothing to work out once: build only checks. */
-#if defined(__MINGW32__) && !defined(__USE_MINGW_ANSI_STDIO)
-#define __USE_MINGW_ANSI_STDIO 1   /* printf's %g as C99 and Python write it: "1e-05" */
-#endif
 #include <math.h>
 #include <stddef.h>
 
 #include "kinematics.h"
-#include "punch_parameters.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 /* FeedParams' fields, in order */
@@ -21,10 +18,8 @@ enum {
     N_PARAMS
 };
 
-/* MACHINE_SCALE and _MEANT of metres and radians */
-#define LENGTH(name, allowed) {name, "m", allowed, 1.0, "mm", 1e3, 0, {0, 0, 0, 0}}
-#define ANGLE(name, allowed) \
-    {name, "rad", allowed, 2 * SEW_PI, "deg", 180.0 / SEW_PI, 0, {0, 0, 0, 0}}
+#define LENGTH(name, allowed) SEW_PARAM(name, "m", allowed)
+#define ANGLE(name, allowed) SEW_PARAM(name, "rad", allowed)
 
 static const SewParamInfo PARAMS[N_PARAMS] = {
     LENGTH("r_l", SEW_POSITIVE), LENGTH("r_f", SEW_POSITIVE), ANGLE("alpha1", SEW_ANY),

@@ -15,7 +15,7 @@
 #include <stdio.h>
 
 #include "oscillator.h"
-#include "punch_parameters.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 #define GRAVITY 9.81
@@ -36,16 +36,11 @@ enum { S_Y, S_Y_DOT, S_CONTACT, S_SPRING_ON, S_LANDINGS, S_F2_MAX, S_HELD, N_STA
 enum { U_XI, U_XI_DOT, U_XI_DDOT, U_F2, U_F2_DOT };
 
 static const SewParamInfo PUNCH_PARAMS[N_PARAMS] = {
-    {"m", "kg", SEW_POSITIVE, SEW_SCALE_KG, "g", SEW_G_PER_KG, 0, {0}},
-    {"F10", "N", SEW_NONNEGATIVE, SEW_SCALE_N, NULL, 0.0, 0, {0}},
-    {"c1", "N/m", SEW_POSITIVE, SEW_SCALE_N_PER_M, NULL, 0.0, 0, {0}},
-    {"b1", "N.s/m", SEW_NONNEGATIVE, SEW_SCALE_NS_PER_M, NULL, 0.0, 0, {0}},
-    {"c2", "N/m", SEW_POSITIVE, SEW_SCALE_N_PER_M, NULL, 0.0, 0, {0}},
-    {"b2", "N.s/m", SEW_NONNEGATIVE, SEW_SCALE_NS_PER_M, NULL, 0.0, 0, {0}},
-    {"c3", "N/m", SEW_POSITIVE, SEW_SCALE_N_PER_M, NULL, 0.0, 0, {0}},
-    {"b3", "N.s/m", SEW_NONNEGATIVE, SEW_SCALE_NS_PER_M, NULL, 0.0, 0, {0}},
-    {"F30", "N", SEW_NONNEGATIVE, SEW_SCALE_N, NULL, 0.0, 0, {0}},
-    {"compression_only", "1", SEW_CHOICE, 0.0, NULL, 0.0, 2, {0, 1}},
+    SEW_PARAM("m", "kg", SEW_POSITIVE), SEW_PARAM("F10", "N", SEW_NONNEGATIVE),
+    SEW_PARAM("c1", "N/m", SEW_POSITIVE), SEW_PARAM("b1", "N.s/m", SEW_NONNEGATIVE),
+    SEW_PARAM("c2", "N/m", SEW_POSITIVE), SEW_PARAM("b2", "N.s/m", SEW_NONNEGATIVE),
+    SEW_PARAM("c3", "N/m", SEW_POSITIVE), SEW_PARAM("b3", "N.s/m", SEW_NONNEGATIVE),
+    SEW_PARAM("F30", "N", SEW_NONNEGATIVE), {"compression_only", "1", SEW_CHOICE, 2, {0, 1, 0, 0}},
 };
 
 typedef struct {

@@ -5,15 +5,12 @@
    punch's kinematic excitation xi = xi0 - psi. The C twin of components/punch_linkage.py's
    PunchLinkage; its row is PunchLinkageSlave's outputs (components/punch_fmu.py). Stateless: the
    crank angle and slider height of the slider's top are worked out once, in build. */
-#if defined(__MINGW32__) && !defined(__USE_MINGW_ANSI_STDIO)
-#define __USE_MINGW_ANSI_STDIO 1   /* printf's %g as C99 and Python write it: "1e-05" */
-#endif
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 
 #include "kinematics.h"
-#include "punch_parameters.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 /* PunchLinkageParams' fields, in order */
@@ -27,13 +24,11 @@ enum { ALPHA0, Y_TOP, N_DERIVED };
 #define SIX_BAR 0
 #define ASSEMBLY_SAMPLES 3600     /* the assembly check samples the crank turn every 0.1° */
 
-/* MACHINE_SCALE and _MEANT of metres and radians */
-#define LENGTH(name, allowed) {name, "m", allowed, 1.0, "mm", 1e3, 0, {0, 0, 0, 0}}
-#define ANGLE(name, allowed) \
-    {name, "rad", allowed, 2 * SEW_PI, "deg", 180.0 / SEW_PI, 0, {0, 0, 0, 0}}
+#define LENGTH(name, allowed) SEW_PARAM(name, "m", allowed)
+#define ANGLE(name, allowed) SEW_PARAM(name, "rad", allowed)
 
 static const SewParamInfo PARAMS[N_PARAMS] = {
-    {"mode", "1", SEW_CHOICE, 0.0, NULL, 0.0, 2, {0, 1, 0, 0}},
+    {"mode", "1", SEW_CHOICE, 2, {0, 1, 0, 0}},
     LENGTH("L_O1A", SEW_POSITIVE), LENGTH("L_AB", SEW_POSITIVE), LENGTH("L_O2B", SEW_POSITIVE),
     LENGTH("L_O2C", SEW_POSITIVE), ANGLE("angle_BO2C", SEW_POSITIVE),
     LENGTH("L_CD", SEW_POSITIVE), LENGTH("x_O2", SEW_ANY), LENGTH("y_O2", SEW_ANY),

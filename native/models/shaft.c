@@ -3,8 +3,8 @@
    functions of time, a cycloidal speed ramp of duration ramp_time and then constant speed. */
 /* twin-of: components/shaft.py sha256:cf6a79e1c52105db */
 #include <math.h>
-#include <stdio.h>
 
+#include "parameters.h"
 #include "sew_model.h"
 
 #define SEW_PI 3.141592653589793
@@ -12,20 +12,14 @@
 enum { OMEGA0, RAMP_TIME };     /* ShaftParams' fields */
 enum { PHI, OMEGA, EPSILON };   /* the FMU's outputs */
 
+static const SewParamInfo PARAMS[] = {
+    SEW_PARAM("omega0", "rad/s", SEW_POSITIVE), SEW_PARAM("ramp_time", "s", SEW_NONNEGATIVE),
+};
+
 static int shaft_build(const double *p, double *derived, char *why)
 {
     (void)derived;
-    /* parameters.check_value: omega0 POSITIVE, ramp_time NONNEGATIVE (the declared ranges,
-       which the runtime holds, give the rest) */
-    if (!(p[OMEGA0] > 0)) {
-        snprintf(why, SEW_WHY, "parameter omega0: must be > 0 rad/s, got %g", p[OMEGA0]);
-        return -1;
-    }
-    if (!(p[RAMP_TIME] >= 0)) {
-        snprintf(why, SEW_WHY, "parameter ramp_time: must be >= 0 s, got %g", p[RAMP_TIME]);
-        return -1;
-    }
-    return 0;
+    return sew_validate(PARAMS, 2, p, why);
 }
 
 /* MainShaft.state(t) */

@@ -4,22 +4,17 @@
    eye E on it, rocker CD; frame A = (0, 0), coordinates (Z, X). The C twin of
    components/takeup.py's TakeupLinkage; its row is TakeupLinkageSlave's outputs
    (components/takeup_fmu.py). Stateless, and nothing to work out once: build only checks. */
-#if defined(__MINGW32__) && !defined(__USE_MINGW_ANSI_STDIO)
-#define __USE_MINGW_ANSI_STDIO 1   /* printf's %g as C99 and Python write it: "1e-05" */
-#endif
 #include <stddef.h>
 
 #include "kinematics.h"
-#include "punch_parameters.h"
+#include "parameters.h"
 #include "sew_model.h"
 
 /* TakeupParams' fields, in order */
 enum { L_AB, L_BC, L_CD, L_BE, ANGLE_CBE, Z_D, X_D, N_PARAMS };
 
-/* MACHINE_SCALE and _MEANT of metres and radians */
-#define LENGTH(name, allowed) {name, "m", allowed, 1.0, "mm", 1e3, 0, {0, 0, 0, 0}}
-#define ANGLE(name, allowed) \
-    {name, "rad", allowed, 2 * SEW_PI, "deg", 180.0 / SEW_PI, 0, {0, 0, 0, 0}}
+#define LENGTH(name, allowed) SEW_PARAM(name, "m", allowed)
+#define ANGLE(name, allowed) SEW_PARAM(name, "rad", allowed)
 
 static const SewParamInfo PARAMS[N_PARAMS] = {
     LENGTH("L_AB", SEW_POSITIVE), LENGTH("L_BC", SEW_POSITIVE), LENGTH("L_CD", SEW_POSITIVE),

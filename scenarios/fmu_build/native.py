@@ -44,15 +44,15 @@ MODELS = NATIVE / "models"
 
 # the model files each FMU compiles (native/models/), with the headers they include
 MODEL_FILES: dict[str, tuple[str, ...]] = {
-    "MainShaft": ("shaft.c",),
-    "PunchLinkage": ("kinematics.c", "punch_linkage.c"),
-    "PunchContact": ("oscillator.c", "punch_contact.c"),
-    "PunchBody": ("oscillator.c", "punch_contact.c"),
-    "Fabric": ("fabric.c",),
-    "TakeupLinkage": ("kinematics.c", "takeup.c"),
-    "FeedLinkage": ("kinematics.c", "feed.c"),
-    "CarriageDrive": ("oscillator.c", "carriage.c"),
-    "CarriageModal": ("oscillator.c", "carriage.c"),
+    "MainShaft": ("parameters.c", "shaft.c"),
+    "PunchLinkage": ("parameters.c", "kinematics.c", "punch_linkage.c"),
+    "PunchContact": ("parameters.c", "oscillator.c", "punch_contact.c"),
+    "PunchBody": ("parameters.c", "oscillator.c", "punch_contact.c"),
+    "Fabric": ("parameters.c", "fabric.c"),
+    "TakeupLinkage": ("parameters.c", "kinematics.c", "takeup.c"),
+    "FeedLinkage": ("parameters.c", "kinematics.c", "feed.c"),
+    "CarriageDrive": ("parameters.c", "oscillator.c", "carriage.c"),
+    "CarriageModal": ("parameters.c", "oscillator.c", "carriage.c"),
 }
 RUNTIME_FILES = ("sew_model.h", "sew_slave.h", "sew_slave.c", "sew_state.c")
 FMI_FILES = {

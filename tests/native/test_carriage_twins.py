@@ -38,7 +38,7 @@ from tests.native.model_twin import ModelError, native_model
 
 RELATIVE = 1e-12
 FLOOR = 1e-300          # the magnitude below which a value is compared absolutely
-SOURCES = ("oscillator", "carriage")
+SOURCES = ("parameters", "oscillator", "carriage")
 
 
 def native(name: str, params):

@@ -37,7 +37,7 @@ from sewfmu.components.takeup_fmu import TakeupLinkageSlave
 from tests.native.model_twin import ModelError, native_model
 
 RELATIVE = 1e-12
-SOURCES = ("kinematics", "punch_linkage", "takeup", "feed")
+SOURCES = ("parameters", "kinematics", "punch_linkage", "takeup", "feed")
 # what Python raises where the C model returns -1 (the model's own checks, and float division
 # by zero or x ** 2 out of range on the way)
 REFUSALS = (ParameterError, AssemblyError, ZeroDivisionError, OverflowError)

@@ -16,7 +16,8 @@ from sewfmu.scenarios.fmu_build import native_compile
 from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS, RUNTIME, build_native_fmu
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-ffp-contract=off"]
-FILES = [RUNTIME / "sew_slave.c", RUNTIME / "sew_state.c", MODELS / "shaft.c"]
+FILES = [RUNTIME / "sew_slave.c", RUNTIME / "sew_state.c", MODELS / "parameters.c",
+         MODELS / "shaft.c"]
 
 
 @pytest.mark.parametrize("compiler", ["gcc", "x86_64-w64-mingw32-gcc"])

@@ -36,8 +36,8 @@ from sewfmu.components.punch_fmu import FabricSlave, PunchBodySlave, PunchContac
 from sewfmu.components.punch_split import Fabric, FabricParams, PunchBody, PunchBodyParams
 from tests.native.model_twin import ModelError, library, native_model
 
-PUNCH = ("punch_contact", "oscillator")
-FABRIC = ("fabric",)
+PUNCH = ("parameters", "punch_contact", "oscillator")
+FABRIC = ("parameters", "fabric")
 RELATIVE = 1e-12
 # the scale of a quantity of each unit in the punch drive: the floor is RELATIVE of it
 SCALE = {"m": 1e-2, "m/s": 1.0, "m/s2": 1e3, "N": 1e3, "N/s": 1e6, "s": 1e-2}

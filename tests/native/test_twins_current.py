@@ -20,6 +20,7 @@ EXPECTED = {
     "takeup.c": {"components/takeup.py"},
     "feed.c": {"components/feed.py"},
     "carriage.c": {"components/carriage.py"},
+    "parameters.c": {"components/parameters.py", "components/units.py"},
 }
 
 
