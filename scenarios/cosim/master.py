@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sewfmu.scenarios.cosim import interrupt, watchdog
+from sewfmu.scenarios.cosim import interrupt, stepper, watchdog
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.divergence import DivergenceWatch
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, FmiCallError, LogCollector, reason
@@ -114,6 +114,7 @@ class Master:
         self._closing = False        # close() asked from another thread: stop between two steps
         self._failed_at: float | None = None     # the time of a failed step not yet undone
         self.recorder: Recorder | None = None      # made by open(); read by result() after close
+        self._compiled = None      # the compiled step loop of the open run (cosim/stepper.py)
 
     @property
     def instances(self) -> list:
@@ -233,6 +234,7 @@ class Master:
                                  None if rows is None else (self.n_steps, self.every, dense),
                                  outputs=system.outputs)
         self.recorder.record(0.0)
+        self._compiled = stepper.compiled_loop(self)
         self._phase = "step"
         self._run = object()
 
@@ -280,6 +282,8 @@ class Master:
         beat, now = paper.q, paper.d        # a beat and the time per step: ~0.1 µs
         k = self.k
         end = min(n, k + count)
+        if self._compiled is not None:         # the same steps in C (cosim/stepper.py)
+            return self._compiled_steps(end, paper)
         while k < end:
             t = k * h
             beat[1] += 1                       # guardian.BEAT
@@ -299,6 +303,22 @@ class Master:
                 watch.check(t)
             if k % every == 0 or k >= dense_k or k == n:
                 record(t)
+            if interrupt.pending:
+                interrupt.raise_pending()
+
+    def _compiled_steps(self, end: int, paper) -> None:
+        """_fixed_steps through the compiled loop, in chunks of stepper.CHUNK steps: between
+        two, what the loop above does between two steps."""
+        h, n = self.h, self.n_steps
+        while self.k < end:
+            if self._closing:
+                self._require_open("steps")
+            k, err = self._compiled.steps(self.k, min(end, self.k + stepper.CHUNK), paper)
+            self.k = k
+            self.t = self.stop if k == n else k * h
+            if err is not None:
+                self._failed_at = t = k * h
+                raise self._failure(err, err.when or f"from t = {t:g} to {t + h:g} s") from None
             if interrupt.pending:
                 interrupt.raise_pending()
 
@@ -397,6 +417,7 @@ class Master:
             self._free()
 
     def _free(self) -> None:
+        self._compiled = None          # it points into the instances' buffers
         if self.algorithm is not None:
             self.algorithm.close()
         while self._snapshots:

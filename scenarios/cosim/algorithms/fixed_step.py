@@ -25,7 +25,8 @@ class Jacobi(Algorithm):
     Settings = JacobiSettings
 
     def advance(self, system, t, h):
-        # inst.do_step(t, h) written out: this loop runs every step (a call less per instance)
+        # inst.do_step(t, h) written out: this loop runs every step (a call less per instance).
+        # Its compiled twin, with exchange's, is cosim/jacobi_loop.c: a change here goes there
         instances = system.instances
         for inst in instances:
             inst.board[2] = inst.at + 1           # guardian.WHERE: doStep
