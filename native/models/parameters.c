@@ -37,6 +37,104 @@ static const struct {
 };
 #define N_UNIT_SCALES ((int)(sizeof UNIT_SCALES / sizeof UNIT_SCALES[0]))
 
+/* --- reading a decimal back exactly ---------------------------------------------------------
+   Whether M·10^E reads back as a double is decided here in whole numbers, not with strtod:
+   mingw-w64's strtod reads some decimals just below a large power of two as the power itself
+   (3.839223843572815e-239 as 2**-791), which would shorten repr there on Windows. */
+
+#define BIG_LIMBS 64                    /* 2048 bits; a comparison needs at most ~1200 */
+
+typedef struct {
+    int n;                              /* limbs in use, least significant first */
+    unsigned int limb[BIG_LIMBS];       /* 32 bits each */
+} Big;
+
+static void big_set(Big *b, unsigned long long v)
+{
+    b->n = 0;
+    for (; v != 0; v >>= 32) b->limb[b->n++] = (unsigned int)(v & 0xffffffffu);
+}
+
+static void big_mul_small(Big *b, unsigned int k)
+{
+    unsigned long long carry = 0;
+    int i;
+    for (i = 0; i < b->n; i++) {
+        carry += (unsigned long long)b->limb[i] * k;
+        b->limb[i] = (unsigned int)(carry & 0xffffffffu);
+        carry >>= 32;
+    }
+    if (carry != 0 && b->n < BIG_LIMBS) b->limb[b->n++] = (unsigned int)carry;
+}
+
+static void big_mul_pow10(Big *b, int n)
+{
+    static const unsigned int small[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000,
+                                         100000000};
+    for (; n >= 9; n -= 9) big_mul_small(b, 1000000000u);
+    big_mul_small(b, small[n]);
+}
+
+static void big_shift_left(Big *b, int n)
+{
+    int whole = n / 32, bits = n % 32, i;
+    if (b->n == 0) return;
+    if (bits != 0) {
+        unsigned int carry = 0;
+        for (i = 0; i < b->n; i++) {
+            unsigned int next = b->limb[i] >> (32 - bits);
+            b->limb[i] = (b->limb[i] << bits) | carry;
+            carry = next;
+        }
+        if (carry != 0 && b->n < BIG_LIMBS) b->limb[b->n++] = carry;
+    }
+    if (whole > 0 && b->n + whole <= BIG_LIMBS) {
+        for (i = b->n - 1; i >= 0; i--) b->limb[i + whole] = b->limb[i];
+        for (i = 0; i < whole; i++) b->limb[i] = 0;
+        b->n += whole;
+    }
+}
+
+static int big_cmp(const Big *a, const Big *b)
+{
+    int i;
+    if (a->n != b->n) return a->n < b->n ? -1 : 1;
+    for (i = a->n - 1; i >= 0; i--)
+        if (a->limb[i] != b->limb[i]) return a->limb[i] < b->limb[i] ? -1 : 1;
+    return 0;
+}
+
+/* sign of M·10^E - k·2^(e-2), as whole numbers (each side times what the other lacks) */
+static int compare_scaled(unsigned long long M, int E, unsigned long long k, int e)
+{
+    Big a, b;
+    big_set(&a, M);
+    big_set(&b, k);
+    if (E >= 0) big_mul_pow10(&a, E); else big_mul_pow10(&b, -E);
+    if (e - 2 >= 0) big_shift_left(&b, e - 2); else big_shift_left(&a, 2 - e);
+    return big_cmp(&a, &b);
+}
+
+/* whether the decimal M·10^E (M > 0) reads back as x (finite, > 0): within half the gap to
+   x's neighbours (half the gap below only, where x is a power of two above the smallest
+   normal), the ends included where x's significand is even (round half to even) */
+static int reads_back(unsigned long long M, int E, double x)
+{
+    unsigned long long bits, f;
+    int biased, e, inclusive, below, above;
+    memcpy(&bits, &x, sizeof bits);
+    biased = (int)((bits >> 52) & 0x7ff);
+    f = bits & ((1ull << 52) - 1);
+    e = biased == 0 ? -1074 : biased - 1075;      /* x = f·2^e */
+    if (biased != 0) f |= 1ull << 52;
+    inclusive = (f & 1) == 0;
+    /* in quarters of the gap above, 2^(e-2): x is 4f, its neighbours' midpoints 4f ± 2 (4f - 1
+       below a power of two, whose gap below is half) */
+    below = compare_scaled(M, E, 4 * f - (f == 1ull << 52 && biased > 1 ? 1 : 2), e);
+    above = compare_scaled(M, E, 4 * f + 2, e);
+    return inclusive ? (below >= 0 && above <= 0) : (below > 0 && above < 0);
+}
+
 /* the digits of a p-digit mantissa m (10^(p-1) <= m < 10^p, or m = 0) */
 static void mantissa_digits(unsigned long long m, int p, char *digits)
 {
@@ -60,25 +158,26 @@ void sew_py_repr(double x, char *out, size_t size)
     if (isinf(x)) { snprintf(out, size, x > 0 ? "inf" : "-inf"); return; }
     for (p = 1; p <= 17; p++, low *= 10) {
         const char *s;
-        double back;
+        unsigned long long nearest;
         high = low * 10;                               /* m lies in [10^(p-1), 10^p) */
         snprintf(buf, sizeof buf, "%.*e", p - 1, ax);
         for (m = 0, s = buf; *s != 'e'; s++)
             if (*s != '.') m = 10 * m + (unsigned long long)(*s - '0');
         e = atoi(s + 1);
-        back = strtod(buf, NULL);
-        if (back == ax) break;
-        if (back < ax) {                               /* the neighbour above */
+        if (ax == 0.0 || reads_back(m, e - p + 1, ax)) break;
+        /* else only the neighbour on x's other side can read back (the one on the same side
+           is farther still); trying both needs no comparison with x */
+        nearest = m;
+        if (nearest + 1 == high ? reads_back(low, e - p + 2, ax)
+                                : reads_back(nearest + 1, e - p + 1, ax)) {
             if (++m == high) { m = low; e++; }
-        } else if (m == low) {                         /* below, across a power of ten */
-            m = high - 1;
-            e--;
-        } else {
-            m--;
+            break;
         }
-        mantissa_digits(m, p, digits);
-        snprintf(buf, sizeof buf, "%se%d", digits, e - p + 1);
-        if (strtod(buf, NULL) == ax) break;
+        if (nearest == low ? reads_back(high - 1, e - p, ax)
+                           : reads_back(nearest - 1, e - p + 1, ax)) {
+            if (m == low) { m = high - 1; e--; } else { m--; }
+            break;
+        }
     }
     if (p > 17) p = 17;                                /* (never: 17 digits always read back) */
     mantissa_digits(m, p, digits);
