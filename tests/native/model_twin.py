@@ -81,7 +81,10 @@ def library(*sources: str) -> ctypes.CDLL:
     process into one library (cached by the sources' contents)."""
     if sources not in _LIBRARIES:
         files = [NATIVE / "models" / f"{s}.c" for s in sources]
-        digest = hashlib.sha256(b"".join(f.read_bytes() for f in files)).hexdigest()[:16]
+        # the headers too: a change to one alone must not reuse a library built before it
+        headers = sorted(NATIVE.glob("*/*.h"))
+        digest = hashlib.sha256(b"".join(f.read_bytes() for f in [*files, *headers])
+                                ).hexdigest()[:16]
         folder = Path(tempfile.gettempdir()) / f"sewfmu-twins-{digest}"
         lib = folder / "twins.so"
         if not lib.exists():
