@@ -99,9 +99,12 @@ def native_sources(name: str, fmi: int) -> dict[str, bytes]:
         if file in files:
             continue
         files[file] = _read(MODELS, file)
-        # the model headers it includes (the runtime's and the C library's are there already)
-        pending += [inc.decode() for inc in _INCLUDE.findall(files[file])
-                    if inc.decode() not in files and (MODELS / inc.decode()).is_file()]
+        # the model headers it includes (the runtime's and the C library's are there already),
+        # and the source beside each (parameters.h: parameters.c)
+        for inc in (i.decode() for i in _INCLUDE.findall(files[file])):
+            companion = inc[:-2] + ".c" if inc.endswith(".h") else ""
+            pending += [f for f in (inc, companion)
+                        if f and f not in files and (MODELS / f).is_file()]
     return dict(sorted(files.items()))
 
 
