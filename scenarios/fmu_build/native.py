@@ -14,6 +14,7 @@ import hashlib
 import importlib
 import os
 import re
+import shutil
 import sys
 import tempfile
 import zipfile
@@ -180,8 +181,8 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
             raise NoCompiler("\n".join(missing))
         for line in missing:
             print(line, file=sys.stderr)
-        staged = dest / f".{name}.fmu.{os.getpid()}"
-        with zipfile.ZipFile(staged, "w", compression=zipfile.ZIP_DEFLATED) as fmu:
+        built = tmp / f"{name}.fmu"
+        with zipfile.ZipFile(built, "w", compression=zipfile.ZIP_DEFLATED) as fmu:
             fmu.writestr("modelDescription.xml", xml)
             for path, data in binaries.items():
                 fmu.writestr(path, data)
@@ -196,6 +197,8 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
                 fmu.writestr(path, data)
         # replace atomically: another process may be reading the old FMU right now
         out = dest / f"{name}.fmu"
+        staged = dest / f".{name}.fmu.{os.getpid()}"
+        shutil.copy2(built, staged)
         os.replace(staged, out)
     return out
 
