@@ -32,6 +32,7 @@ enum { CALL_DO_STEP = 1, CALL_SET_INPUTS = 2, CALL_GET_OUTPUTS = 3, CALL_GET_BOO
 enum { STEPS_DONE = 0, CALL_FAILED = 1, NOT_FINITE = 2, ROW_NEEDS_PYTHON = 3 };
 #define WARNING_LEVEL 1     /* fmi2Warning, fmi3Warning: the worst status a run goes on after */
 
+typedef void (*sew_function)(void);      /* any of the FMU's functions, as passed in */
 typedef int (*do_step2)(void *, double, double, int);
 typedef int (*do_step3)(void *, double, double, bool, bool *, bool *, bool *, double *);
 typedef int (*values2)(void *, const uint32_t *, size_t, void *);
@@ -43,7 +44,7 @@ typedef struct {
     int64_t no_set_prior;       /* doStep's noSetFMUStatePriorToCurrentCommunicationPoint */
     int64_t where;              /* slot * 32: this instance's share of the board's WHERE */
     void *component;
-    void *do_step, *set_real, *get_real, *get_boolean;
+    sew_function do_step, set_real, get_real, get_boolean;
     /* FMI 3.0 doStep's results: event handling needed, terminate, early return, last time */
     bool *event, *terminate, *early;
     double *last_time;
@@ -98,7 +99,7 @@ static int do_step(SewInstance *s, double t, double h)
     return ((do_step2)s->do_step)(s->component, t, h, (int)s->no_set_prior);
 }
 
-static int values(const SewInstance *s, void *call, const uint32_t *vr, int64_t n, void *buf)
+static int values(const SewInstance *s, sew_function call, const uint32_t *vr, int64_t n, void *buf)
 {
     if (s->fmi == 3)
         return ((values3)call)(s->component, vr, (size_t)n, buf, (size_t)n);

@@ -16,6 +16,7 @@ a temporary folder where the cache is off or cannot be written.
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import functools
 import hashlib
@@ -142,7 +143,7 @@ class CompiledLoop:
         self._flag_bytes = (_q * max(1, n_flags))(*[now.nbytes for now in recorder._flags_now])
         self.run.flag_rows, self.run.flag_now, self.run.flag_bytes = (
             ctypes.addressof(a) for a in (self._flag_rows, self._flag_now, self._flag_bytes))
-        self._board = None            # (board, where board): the ones the addresses are of
+        self._board = None     # (the board's q, the instances' board): what the addresses are of
 
     def _instance(self, inst, outputs: np.ndarray) -> SewInstance:
         fmi3 = isinstance(inst, Fmi3Instance)
@@ -175,12 +176,11 @@ class CompiledLoop:
         """The addresses of the board's beat and time (the run's now) and of the instances'
         WHERE (the board they were given at the opening)."""
         where = self.instances[0].board if self.instances else paper.q
-        if self._board != (paper, where):
-            beat = ctypes.addressof(_q.from_buffer(paper.q))
-            self.run.beat = beat + 8 * BEAT
-            self.run.now = beat + 8 * T          # d and q are the one page
+        if self._board is None or self._board[0] is not paper.q or self._board[1] is not where:
+            self.run.beat = ctypes.addressof(_q.from_buffer(paper.q)) + 8 * BEAT
+            self.run.now = ctypes.addressof(_d.from_buffer(paper.d)) + 8 * T
             self.run.where = ctypes.addressof(_q.from_buffer(where)) + 8 * WHERE
-            self._board = (paper, where)
+            self._board = (paper.q, where)
 
     def steps(self, k: int, end: int, paper) -> tuple[int, FmiCallError | None]:
         """Steps from k up to `end`, recorded: (the steps done, the failure of the step k
@@ -273,6 +273,12 @@ def _compiled() -> Path:
             if done.returncode != 0 or not scratch.is_file():
                 raise RuntimeError(f"{' '.join(command)} failed: {done.stderr.strip()}")
             os.replace(scratch, out)
+            # the libraries of earlier sources go (one a process has loaded stays loaded)
+            for stale in folder.glob(f"jacobi_loop-*{out.suffix}"):
+                if stale != out:
+                    for path in (stale, folder / f".{stale.name}.lock"):
+                        with contextlib.suppress(OSError):
+                            path.unlink()
         return out
     finally:
         if lock is not None:

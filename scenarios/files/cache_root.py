@@ -1,9 +1,9 @@
 """Where sewfmu keeps what it works out once and reuses across processes: $SEWFMU_CACHE_DIR
 (relative: from the folder the process started in), else $XDG_CACHE_HOME/sewfmu/fmus, else
 ~/.cache/sewfmu/fmus; SEWFMU_CACHE_DIR="" turns it off. That folder may be the user's, so
-sewfmu keeps to its subfolder SUBFOLDER there: the extracted FMUs (scenarios/cosim/fmu_cache.py)
-and, in its folder "declared-units", the FMUs' declared units (scenarios/format/
-declared_units.py). A module of its own, light, so that a scenario's checks find the folder
+sewfmu keeps to its subfolder SUBFOLDER there: the extracted FMUs (scenarios/cosim/fmu_cache.py),
+in its folder "declared-units" the FMUs' declared units (scenarios/format/declared_units.py),
+and in its folder "stepper" the compiled step loop (scenarios/cosim/stepper.py). A module of its own, light, so that a scenario's checks find the folder
 without the engine."""
 from __future__ import annotations
 

@@ -5,12 +5,15 @@ and the same one line where a step fails (a Discard, an output that is NaN, a Bo
 Error), with inputs converted by a * x + b. No FMU is built: fast."""
 import ctypes
 import math
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
 
-from sewfmu.scenarios.cosim import stepper
+from sewfmu.scenarios.cosim import stepper, watchdog
 from sewfmu.scenarios.cosim.fmi_calls import CosimError, Status
+from sewfmu.scenarios.cosim.guardian import BEAT, WHERE, T
 from sewfmu.scenarios.cosim.master import Master
 from tests.fake_fmu import Failing, FakeInstance, Integrator, Switch, fake_scenario
 
@@ -102,6 +105,13 @@ class CalledInstance(FakeInstance):
             else status
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _watched():
+    """The board of a watched run, as every run after the process's first writes it."""
+    with watchdog.watching(Master(fake_scenario({}, [], stop_time=1.0, step=0.1), {})):
+        pass
+
+
 @pytest.fixture(autouse=True)
 def _compiled(monkeypatch):
     if stepper.library() is None:
@@ -126,11 +136,17 @@ def _run(monkeypatch, compiled: bool, models) -> tuple[Master, object, list]:
         return CalledInstance(declaration.name, made[declaration.name], log)
 
     master = Master(scenario, {}, make_instance=make)
+    board = watchdog.board()
+    beat = board.q[BEAT]
     try:
         outcome = master.run()
     except CosimError as err:
         outcome = str(err)
     assert (master.k > 0) and any(t[1] == "doStep" for t in trace)
+    # what the guardian reads: the beats, the time and the call last written
+    paper = watchdog.board()
+    trace.append(("board", paper.q[BEAT] - beat if paper is board else None, paper.d[T],
+                  paper.q[WHERE]))
     return master, outcome, trace
 
 
@@ -171,3 +187,14 @@ def test_a_run_is_the_python_loops_call_for_call(monkeypatch):
 def test_a_failed_step_is_the_python_loops_line(monkeypatch, models, words):
     said = _same(monkeypatch, models)
     assert said is not None and said.startswith(words), said
+
+
+@pytest.mark.parametrize("compiler", ["gcc", "x86_64-w64-mingw32-gcc"])
+def test_the_loop_compiles_warning_free(compiler, tmp_path):
+    cc = shutil.which(compiler)
+    if cc is None:
+        pytest.skip(f"no {compiler}")
+    done = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-pedantic", "-O2",
+                           "-ffp-contract=off", "-c", str(stepper.SOURCE), "-o",
+                           str(tmp_path / "loop.o")], capture_output=True, text=True)
+    assert done.returncode == 0 and not done.stderr.strip(), done.stderr
