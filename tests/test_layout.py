@@ -262,7 +262,7 @@ def test_every_sewfmu_import_in_the_tree_resolves():
 # the tests lie in folders by wing (and hosts/ for other FMI tools, independent/ for the
 # references that share no code with sewfmu); at the top only what guards the package as a whole
 TEST_FOLDERS = {"app", "components", "cosim", "design", "docs", "format", "hosts", "independent",
-                "interop", "mechanisms", "references", "runs"}
+                "interop", "mechanisms", "native", "references", "runs"}
 TOP_TESTS = {"test_extras.py", "test_layout.py", "test_library.py", "test_public_api_arguments.py"}
 MAX_TEST_LINES = 600
 
@@ -281,7 +281,7 @@ def test_every_import_path_is_a_path_on_disk():
     """sewfmu/scenarios and sewfmu/components are links to the folders at the top, so that a
     reader's tools (grep by path, an editor without the install) find `sewfmu.scenarios.format.
     values` at sewfmu/scenarios/format/values.py."""
-    for name in ("scenarios", "components"):
+    for name in ("scenarios", "components", "native"):   # native/: the C sources, as data
         link = REPO / "sewfmu" / name
         assert link.is_symlink() and link.resolve() == (REPO / name).resolve(), link
     for module in ("sewfmu.scenarios.format.values", "sewfmu.components.punch_contact",

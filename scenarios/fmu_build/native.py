@@ -36,8 +36,7 @@ from sewfmu.scenarios.fmu_build.native_description import (
     native_model_description,
     token_of,
 )
-from sewfmu.scenarios.fmu_build.sources import default_fmu_dir
-from sewfmu.scenarios.fmu_build.up_to_date import ensure_built
+from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
 
 NATIVE = NATIVE_SOURCE_DIR                     # runtime/ and models/
 RUNTIME = NATIVE / "runtime"
@@ -142,7 +141,7 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
     if name not in MODEL_FILES:
         raise KeyError(f"unknown FMU {name!r} (known: {', '.join(MODEL_FILES)})")
     dest = Path(dest or default_native_dir(fmi))
-    python_fmu = ensure_built([name], Path(python_dir or default_fmu_dir(fmi)), fmi=fmi)[name]
+    python_fmu = _python_fmu(name, Path(python_dir or default_fmu_dir(fmi)), fmi)
     with zipfile.ZipFile(python_fmu) as archive:
         python_xml = archive.read("modelDescription.xml")
         carried = {n: archive.read(n) for n in archive.namelist()
@@ -206,3 +205,13 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
 def build_all_native(dest: Path | None = None, fmi: int = 2,
                      names: list[str] | None = None) -> list[Path]:
     return [build_native_fmu(name, dest, fmi=fmi) for name in (names or list(MODEL_FILES))]
+
+
+def _python_fmu(name: str, folder: Path, fmi: int) -> Path:
+    """The Python FMU a native one mirrors, built where missing or carrying other code (not
+    through up_to_date.ensure_built, which imports this builder to build native FMUs)."""
+    path = folder / f"{name}.fmu"
+    if fmu_version(path) != current_version():
+        from sewfmu.scenarios.fmu_build.build import build_fmu  # pythonfmu's builders: only to build
+        build_fmu(name, folder, fmi=fmi)
+    return path
