@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from sewfmu.components.registry import FMUS
+from sewfmu.errors import Error
 from sewfmu.scenarios.fmu_build.native_current import native_fmu_dir, native_version
 from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
 from sewfmu.scenarios.format.fmu_file import (
@@ -53,10 +54,16 @@ def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None) -> P
                             f"FMUs ({err}); run with experiment.fmus = \"python\"") from None
     try:
         return Path(build_native_fmu(name, dest, fmi=fmi, python_dir=python_dir))
-    except (FileNotFoundError, KeyError) as err:
+    except Error:                       # no compiler: its one line says what to install
+        raise
+    except (FileNotFoundError, KeyError, RuntimeError) as err:
+        # a compiler's refusal is many lines: the first error here, all of them from the build
+        lines = str(err).strip().splitlines() or [type(err).__name__]
+        first = next((line for line in lines[1:] if "error" in line.lower()), "")
+        why = " ".join(f"{lines[0]} {first}".split())
         raise ScenarioError(f"experiment.fmus = \"native\": the native {name} cannot be built "
-                            f"({' '.join(str(err).split())}); run it with experiment.fmus = "
-                            f"\"python\"") from None
+                            f"({why[:300]}); `sewfmu build --native` shows why in full, and "
+                            f"experiment.fmus = \"python\" runs the Python FMUs") from None
 
 
 def fmus_for_names(names: list[str], fmu_dir: Path | None = None, fmi: int = 2,

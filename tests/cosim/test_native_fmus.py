@@ -284,3 +284,29 @@ def test_an_input_refused_with_error_is_one_line_naming_instance_time_and_reason
     start, end = map(float, found.groups())
     assert 0.3 < start <= 0.5 and start < end <= start + 0.1 + 1e-12, text
     assert made["a"].calls[-1] == "free" and made["b"].calls[-1] == "free"
+
+
+@pytest.mark.parametrize("failure, told", [
+    (RuntimeError("compiling MainShaft.so for linux failed:\ngcc -std=c99 shaft.c\n"
+                  "shaft.c:3:1: error: unknown type name 'ParamInfo'\n  3 | x"),
+     "compiling MainShaft.so for linux failed: shaft.c:3:1: error: unknown type name "
+     "'ParamInfo'"),
+    (FileNotFoundError("native source native/models/shaft.c is missing"),
+     "native source native/models/shaft.c is missing")])
+def test_a_native_fmu_that_cannot_be_built_is_one_line(monkeypatch, tmp_path, failure, told):
+    native = pytest.importorskip("sewfmu.scenarios.fmu_build.native")
+
+    raised = [failure]
+
+    def fails(*args, **kwargs):
+        raise raised[0]
+
+    monkeypatch.setattr(native, "build_native_fmu", fails)
+    with pytest.raises(ScenarioError) as err:
+        up_to_date.fmus_for_names(["MainShaft"], tmp_path, kind="native")
+    text = str(err.value)
+    assert "\n" not in text and f"the native MainShaft cannot be built ({told})" in text, text
+    raised[0] = native.NoCompiler("sewfmu build --native: no compiler for linux: needs gcc")
+    with pytest.raises(native.NoCompiler) as err:      # its own line: what to install
+        up_to_date.fmus_for_names(["MainShaft"], tmp_path, kind="native")
+    assert str(err.value) == str(raised[0])
