@@ -10,9 +10,9 @@ needs the interpreter, and the watchdog and guardian answer a Python FMU that ha
 Python loop's bookkeeping. Otherwise, or where no C compiler is found, the Python loop runs as
 before (a debug line says why); SEWFMU_STEP_LOOP=python makes every run take it (to compare).
 
-The library is compiled once, on first use, with the native FMUs' compiler for this machine
-(fmu_build/native_compile.py) into the folder FOLDER of sewfmu's cache (files/cache_root.py), or
-a temporary folder where the cache is off or cannot be written.
+The library is compiled once, on first use, with a C compiler of this machine (found as the
+native FMUs' builder finds its own) into the folder FOLDER of sewfmu's cache
+(files/cache_root.py), or a temporary folder where the cache is off or cannot be written.
 """
 from __future__ import annotations
 
@@ -20,9 +20,9 @@ import contextlib
 import ctypes
 import functools
 import hashlib
+import importlib.util
 import logging
 import os
-import platform
 import shutil
 import sys
 import tempfile
@@ -230,21 +230,21 @@ def library():
 
 
 def _host_compiler() -> tuple[list[str], list[str]]:
-    """(command, flags) of the native FMUs' compiler for this machine."""
-    # the builder's compilers, only where a run takes the compiled loop
-    from sewfmu.scenarios.fmu_build.native_compile import FLAGS, TARGETS, compiler_for
-
-    x86_64 = platform.machine().lower() in ("x86_64", "amd64")
-    if sys.platform.startswith("linux") and x86_64:
-        command, extra = compiler_for(TARGETS[0])
-    elif sys.platform == "win32" and x86_64:
-        command, extra = compiler_for(TARGETS[1])
+    """(command, flags) of a C compiler for this machine, found as fmu_build/native_compile.py
+    finds the native FMUs' (which the run's wing may not import: tests/test_layout.py): the
+    machine's gcc or cc (mingw-w64's on Windows), else zig's from the package index."""
+    names = ("x86_64-w64-mingw32-gcc", "gcc", "cc") if sys.platform == "win32" else \
+        ("gcc", "cc", "clang")
+    cc = next((found for name in names if (found := shutil.which(name))), None)
+    if cc is not None:
+        command = [cc]
+    elif importlib.util.find_spec("ziglang") is not None:
+        command = [sys.executable, "-m", "ziglang", "cc"]
     else:
-        cc = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
-        if cc is None:
-            raise FileNotFoundError("no C compiler (cc)")
-        command, extra = [cc], ["-fPIC"]
-    return command, [*FLAGS, *extra, "-shared"]
+        raise FileNotFoundError("no C compiler (gcc, cc, or the ziglang package)")
+    # the builder's flags: no fused multiply-add, so that the numbers are the Python loop's
+    flags = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-shared"]
+    return command, flags + ([] if sys.platform == "win32" else ["-fPIC"])
 
 
 def _compiled() -> Path:
