@@ -4,6 +4,8 @@ line where a step fails (a refused input, a discarded doStep), Ctrl-C answered b
 chunks with the Python loop's record so far; and the runs it must leave to the Python loop (Python
 FMUs, other masters, feedback loops, experiment.step_timeout) left there."""
 import signal
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -147,3 +149,29 @@ def test_what_the_compiled_loop_cannot_do_stays_with_the_python_loop(why, name, 
     master.run()
     assert chunks == [], why
     assert len(master.recorder.arrays()[0]) > 1
+
+
+def test_closing_from_another_thread_stops_the_compiled_loop_between_two_chunks(fmu_dir,
+                                                                                 chunks):
+    """close() waits for the chunk under way (the instances it frees are the chunk's), and the
+    stepping thread stops at the next one, as the Python loop stops at its next step."""
+    master = _master("punch_drive", fmu_dir, **{"experiment.revolutions": 2000})
+    master.__enter__()
+    told = []
+
+    def stepping():
+        try:
+            master.steps(10**9)
+        except sewfmu.Error as err:
+            told.append(str(err))
+
+    thread = threading.Thread(target=stepping)
+    thread.start()
+    while not chunks and thread.is_alive():
+        time.sleep(0.001)
+    time.sleep(0.02)
+    master.close()
+    thread.join()
+    assert told and "the run is not open" in told[0], told
+    assert 0 < master.k < master.n_steps and master.k % stepper.CHUNK == 0
+    assert chunks and chunks[-1][1] == master.k      # it stopped where a chunk ended
