@@ -362,9 +362,13 @@ static int refusal_of_set(const SewSlave *s, const SewVariable *v, double x, cha
     }
     if (!(x >= v->min && x <= v->max)) {
         const char *gap = v->unit[0] ? " " : "";
-        snprintf(why, SEW_WHY, "%s %s = %.6g%s%s is outside its range [%g, %g]%s%s: refused",
-                 v->causality == SEW_PARAMETER ? "parameter" : "input", v->name, x, gap, v->unit,
-                 v->min, v->max, gap, v->unit);
+        int n = snprintf(why, SEW_WHY, "%s %s = %.6g%s%s is outside its range [%g, %g]%s%s: "
+                         "refused", v->causality == SEW_PARAMETER ? "parameter" : "input",
+                         v->name, x, gap, v->unit, v->min, v->max, gap, v->unit);
+        /* an input beyond its range in a run is what the Python FMU's refusal says it is */
+        if (v->causality == SEW_INPUT && n > 0 && n < SEW_WHY)
+            snprintf(why + n, (size_t)(SEW_WHY - n), " (set at t = %g s: a co-simulation that "
+                     "diverges, or a value in another unit)", s->time);
         return -1;
     }
     return 0;

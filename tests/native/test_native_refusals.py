@@ -162,6 +162,9 @@ def test_an_input_outside_its_range_is_refused_and_the_step_goes_on(punch):
     punch.start()
     xi = punch.vr["xi"]
     _refused(punch, _set, punch, [xi], [5.0], reason="input xi = 5 m is outside its range")
+    # in the Python FMU's words: where a run is, and what such a value usually is
+    _refused(punch, _set, punch, [xi], [5.0], reason="(set at t = 0 s: a co-simulation that "
+                                                     "diverges, or a value in another unit)")
     _refused(punch, _set, punch, [xi], [math.nan], reason="not a finite number")
     punch.fmu.doStep(0.0, 1e-5)
     assert all(math.isfinite(x) for x in punch.outputs(["y", "y_dot"]))
