@@ -105,6 +105,18 @@ class PunchInFmpy:
         return spent / len(series), (in_step - idle) / len(series)
 
 
+def call_floor(fmu: Path, calls: int = 100_000) -> float:
+    """µs of one call through fmpy's ctypes function that does no work in the FMU (getReal of
+    no values): what any doStep through fmpy costs at the least, native or not."""
+    inst = PunchInFmpy(fmu)
+    get_real, c, vr, buf = inst.fmu.dll.fmi2GetReal, inst.fmu.component, inst.out_vr, \
+        inst.out_buf
+    started = time.perf_counter()
+    for _ in range(calls):
+        get_real(c, vr, 0, buf)
+    return (time.perf_counter() - started) / calls * 1e6
+
+
 def slider_series() -> np.ndarray:
     """The linkage's xi, xi_dot, xi_ddot at every step of punch_drive (a Python FMU run)."""
     run = sewfmu.run("punch_drive", set={"experiment.accuracy": "off"})
@@ -197,6 +209,12 @@ def main() -> None:
     for what, label in (("step", "set, doStep, get"), ("doStep", "doStep alone")):
         n, p = punch[f"native_{what}"], punch[f"python_{what}"]
         print(f"   {label:<18} native {n:8.2f}   python {p:8.2f}   python/native {p / n:6.1f}")
+    floor = statistics.median(call_floor(fmus["native"]) for _ in range(args.repeat))
+    print(f"   fmpy's ctypes call itself (a getReal of no values): {floor:.2f} µs, so through "
+          f"fmpy doStep can be at most {punch['python_doStep'] / floor:.0f}× faster than the "
+          f"Python FMU's;\n   without it: native {punch['native_doStep'] - floor:.2f}   python "
+          f"{punch['python_doStep'] - floor:.2f}   python/native "
+          f"{(punch['python_doStep'] - floor) / (punch['native_doStep'] - floor):6.1f}")
     with tempfile.TemporaryDirectory() as tmp:
         own = own_cost(fmus["native"], Path(tmp), not args.no_callgrind)
     print(f"\n2. the native PunchContact's own step (set, doStep, get in a C loop): "
