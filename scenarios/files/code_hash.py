@@ -25,13 +25,18 @@ def _python_files(folder: Path) -> list[tuple[str, str]]:
 
 
 def hash_of(*folders: Path) -> str:
-    files = [file for folder in folders for file in _python_files(folder)]
+    return hash_of_files([file for folder in folders for file in _python_files(folder)])
+
+
+def hash_of_files(files: list[tuple[str, str]], separator: bytes = b"") -> str:
+    """12 hex digits of the hash of the (name, path) files' names and bytes (each name followed
+    by `separator`), read again only when a file's stat changed."""
     key = tuple((path, st.st_ino, st.st_size, st.st_mtime_ns)
                 for path, st in ((path, os.stat(path)) for _, path in files))
-    if key not in _SEEN:
+    if (key, separator) not in _SEEN:
         digest = hashlib.sha256()
         for name, path in files:
-            digest.update(name.encode())
+            digest.update(name.encode() + separator)
             digest.update(Path(path).read_bytes())
-        _SEEN[key] = digest.hexdigest()[:12]
-    return _SEEN[key]
+        _SEEN[key, separator] = digest.hexdigest()[:12]
+    return _SEEN[key, separator]

@@ -10,20 +10,17 @@ once per process while unchanged), and imports the builder only to build.
 """
 from __future__ import annotations
 
-import hashlib
 import os
 import zipfile
 from pathlib import Path
 
+from sewfmu.scenarios.files.code_hash import hash_of_files
 from sewfmu.scenarios.fmu_build.sources import MODEL_CODE_DIR, current_version, default_fmu_dir
 
 # the C sources of the native FMUs: the models, the FMI layers, the runtime
 NATIVE_SOURCE_DIR = MODEL_CODE_DIR.parent / "native"
 SOURCE_SUFFIXES = (".c", ".h")
 NATIVE_FOLDER = "native"        # fmus/native/, fmus/native/fmi3/
-
-# the files' (path, inode, size, mtime) -> their hash, for this process's lifetime
-_SEEN: dict[tuple, str] = {}
 
 
 def native_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
@@ -50,17 +47,7 @@ def _source_files(folder: Path) -> list[tuple[str, str]]:
 def native_sources_hash(folder: Path | None = None) -> str:
     """Hash of the name and bytes of every .c and .h file under `folder` (default native/; 12
     hex digits)."""
-    files = _source_files(Path(folder or NATIVE_SOURCE_DIR))
-    key = tuple((path, st.st_ino, st.st_size, st.st_mtime_ns)
-                for path, st in ((path, os.stat(path)) for _, path in files))
-    if key not in _SEEN:
-        digest = hashlib.sha256()
-        for name, path in files:
-            digest.update(name.encode())
-            digest.update(b"\0")
-            digest.update(Path(path).read_bytes())
-        _SEEN[key] = digest.hexdigest()[:12]
-    return _SEEN[key]
+    return hash_of_files(_source_files(Path(folder or NATIVE_SOURCE_DIR)), separator=b"\0")
 
 
 def native_version() -> str:
