@@ -125,7 +125,7 @@ static int drive_outputs(const double *p, const double *derived, const double *s
 }
 
 const SewModel SEW_MODEL_CarriageDrive = {
-    "CarriageDrive", 1, 0, drive_build, NULL, NULL, drive_outputs,
+    "CarriageDrive", 1, 0, drive_build, NULL, NULL, drive_outputs, 0,
 };
 
 /* === CarriageModal ============================================================================ */
@@ -345,5 +345,5 @@ static int carriage_outputs(const double *p, const double *d, const double *stat
 
 const SewModel SEW_MODEL_CarriageModal = {
     "CarriageModal", N_DERIVED, N_STATE, carriage_build, carriage_initialize, carriage_advance,
-    carriage_outputs,
+    carriage_outputs, 0,
 };

@@ -179,5 +179,5 @@ static int fabric_outputs(const double *p, const double *derived, const double *
 
 const SewModel SEW_MODEL_Fabric = {
     "Fabric", 0, N_STATE,
-    fabric_build, fabric_initialize, fabric_advance, fabric_outputs,
+    fabric_build, fabric_initialize, fabric_advance, fabric_outputs, 0,
 };

@@ -131,5 +131,5 @@ static int outputs(const double *p, const double *derived, const double *state,
 }
 
 const SewModel SEW_MODEL_FeedLinkage = {
-    "FeedLinkage", 0, 0, build, NULL, NULL, outputs,
+    "FeedLinkage", 0, 0, build, NULL, NULL, outputs, 0,
 };

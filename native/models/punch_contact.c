@@ -492,7 +492,7 @@ static int contact_outputs(const double *p, const double *derived, const double 
 
 const SewModel SEW_MODEL_PunchContact = {
     "PunchContact", N_DERIVED, N_STATE,
-    contact_build, contact_initialize, contact_advance, contact_outputs,
+    contact_build, contact_initialize, contact_advance, contact_outputs, 0,
 };
 
 /* === SEW_MODEL_PunchBody: the fabric's force F2 (+ F2_dot·τ) is the external force ========== */
@@ -560,5 +560,5 @@ static int body_outputs(const double *p, const double *derived, const double *st
 
 const SewModel SEW_MODEL_PunchBody = {
     "PunchBody", N_DERIVED, N_STATE,
-    body_build, body_initialize, body_advance, body_outputs,
+    body_build, body_initialize, body_advance, body_outputs, 0,
 };

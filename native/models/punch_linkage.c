@@ -233,5 +233,5 @@ static int outputs(const double *p, const double *derived, const double *state,
 }
 
 const SewModel SEW_MODEL_PunchLinkage = {
-    "PunchLinkage", N_DERIVED, 0, build, NULL, NULL, outputs,
+    "PunchLinkage", N_DERIVED, 0, build, NULL, NULL, outputs, 0,
 };

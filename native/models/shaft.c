@@ -3,6 +3,7 @@
    functions of time, a cycloidal speed ramp of duration ramp_time and then constant speed. */
 /* twin-of: components/shaft.py sha256:cf6a79e1c52105db */
 #include <math.h>
+#include <stdio.h>
 
 #include "parameters.h"
 #include "sew_model.h"
@@ -26,8 +27,15 @@ static int shaft_build(const double *p, double *derived, char *why)
 static int shaft_outputs(const double *p, const double *derived, const double *state,
                          const double *u, double t, double *row, char *why)
 {
-    (void)derived, (void)state, (void)u, (void)why;
+    (void)derived, (void)state, (void)u;
     double w = p[OMEGA0], tr = p[RAMP_TIME];
+    if (t < 0.0) {
+        /* state(t) is for t >= 0 (the shaft starts at rest at t = 0): before, the Python model
+           gives NaN (no ramp) or the ramp's formula run backwards, neither the shaft's motion */
+        snprintf(why, SEW_WHY, "t = %g s is before the shaft starts (t = 0): the shaft's model "
+                 "is defined for t >= 0 only", t);
+        return -1;
+    }
     if (t >= tr) {
         /* the ramp covers omega0*tr/2 of angle (mean speed omega0/2) */
         row[PHI] = w * (t - 0.5 * tr);
@@ -45,5 +53,5 @@ static int shaft_outputs(const double *p, const double *derived, const double *s
 }
 
 const SewModel SEW_MODEL_MainShaft = {
-    "MainShaft", 0, 0, shaft_build, NULL, NULL, shaft_outputs,
+    "MainShaft", 0, 0, shaft_build, NULL, NULL, shaft_outputs, 1,
 };

@@ -84,5 +84,5 @@ static int outputs(const double *p, const double *derived, const double *state,
 }
 
 const SewModel SEW_MODEL_TakeupLinkage = {
-    "TakeupLinkage", 0, 0, build, NULL, NULL, outputs,
+    "TakeupLinkage", 0, 0, build, NULL, NULL, outputs, 0,
 };

@@ -1,7 +1,6 @@
 /* FMI 2.0 co-simulation over the runtime (sew_slave.h): every function of fmi2Functions.h.
    What a co-simulation FMU of sewfmu does not provide (directional and input/output
    derivatives, asynchronous steps, model exchange) is refused with fmi2Error and a log line. */
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -13,6 +12,7 @@ typedef struct {
     fmi2CallbackFunctions cb;
     char *name;
     int logging;
+    int discarded;      /* the last doStep was discarded: fmi2Terminated is true */
 } Fmi2Instance;
 
 static const char *category_of(SewStatus status)
@@ -49,8 +49,9 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[])
 {
     CHECK(c);
-    if (nCategories > 0 && !categories)
-        return (fmi2Status)sew_refuse(SLAVE(c), "fmi2SetDebugLogging: no categories given");
+    if (sew_check_categories(SLAVE(c), "fmi2SetDebugLogging", nCategories,
+                             (const char *const *)categories) != SEW_OK)
+        return fmi2Error;
     ((Fmi2Instance *)c)->logging = loggingOn ? 1 : 0;
     return fmi2OK;
 }
@@ -118,9 +119,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
     if (s->phase != SEW_INSTANTIATED)
         return (fmi2Status)sew_refuse(s, "fmi2SetupExperiment: only before "
                                       "fmi2EnterInitializationMode");
-    if (!isfinite(startTime))
-        return (fmi2Status)sew_refuse(s, "fmi2SetupExperiment: the start time must be finite, "
-                                      "got %g", startTime);
+    if (sew_check_start_time(s, "fmi2SetupExperiment", startTime) != SEW_OK)
+        return fmi2Error;
     if (stopTimeDefined && !(stopTime >= startTime))
         return (fmi2Status)sew_refuse(s, "fmi2SetupExperiment: the stop time %g is before the "
                                       "start time %g", stopTime, startTime);
@@ -151,6 +151,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 {
     CHECK(c);
     sew_reset(SLAVE(c));
+    ((Fmi2Instance *)c)->discarded = 0;
     return fmi2OK;
 }
 
@@ -339,8 +340,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
 {
     (void)noSetFMUStatePriorToCurrentPoint;
     CHECK(c);
-    return (fmi2Status)sew_do_step(SLAVE(c), "fmi2DoStep", currentCommunicationPoint,
+    SewStatus status = sew_do_step(SLAVE(c), "fmi2DoStep", currentCommunicationPoint,
                                    communicationStepSize);
+    ((Fmi2Instance *)c)->discarded = status == SEW_DISCARD;
+    return (fmi2Status)status;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) { REFUSE(c, "fmi2CancelStep", NO_ASYNC); }
@@ -371,7 +374,11 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 {
     CHECK(c);
     if (s == fmi2Terminated && value) {
-        *value = fmi2False;     /* the FMU never asks to end a simulation */
+        /* true after a Discard, as pythonfmu's binary answers for the Python FMUs: a host that
+           asks (fmpy's simulate_fmu, fmusim) stops there instead of retrying the same step
+           without end; a master that retries shorter steps does not ask (pythonfmu keeps it
+           set for good; here the next step taken clears it) */
+        *value = ((Fmi2Instance *)c)->discarded ? fmi2True : fmi2False;
         return fmi2OK;
     }
     REFUSE(c, "fmi2GetBooleanStatus", "only fmi2Terminated is provided");

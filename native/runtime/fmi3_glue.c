@@ -35,8 +35,9 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance c, fmi3Boolean loggingOn, size_t nCa
                                const fmi3String categories[])
 {
     CHECK(c);
-    if (nCategories > 0 && !categories)
-        return (fmi3Status)sew_refuse(SLAVE(c), "fmi3SetDebugLogging: no categories given");
+    if (sew_check_categories(SLAVE(c), "fmi3SetDebugLogging", nCategories, categories)
+        != SEW_OK)
+        return fmi3Error;
     ((Fmi3Instance *)c)->logging = loggingOn ? 1 : 0;
     return fmi3OK;
 }
@@ -169,6 +170,9 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
                                    communicationStepSize);
     if (eventHandlingNeeded)
         *eventHandlingNeeded = fmi3False;
+    /* false after a Discard too, as the Python FMU's (pythonfmu3, Fmi3StepResult): FMI 3.0
+       leaves the choice to the importer (retry shorter from a saved state, or stop), and
+       fmpy and fmusim stop at a Discard status */
     if (terminateSimulation)
         *terminateSimulation = fmi3False;
     if (earlyReturn)

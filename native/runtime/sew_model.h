@@ -49,6 +49,11 @@ typedef struct SewModel {
        state. 0, or -1 with the reason in why (the runtime then gives NaN and logs it). */
     int (*outputs)(const double *p, const double *derived, const double *state, const double *u,
                    double t, double *row, char *why);
+
+    /* 1: the model is a closed form of time from rest at t = 0 (the shaft), defined for t >= 0
+       only, and the runtime refuses a negative start time saying so; 0: any start time (the
+       model takes its time from its inputs, or only steps) */
+    int from_time_zero;
 } SewModel;
 
 typedef enum { SEW_REAL = 0, SEW_INTEGER = 1, SEW_BOOLEAN = 2 } SewKind;

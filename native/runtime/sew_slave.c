@@ -16,25 +16,32 @@
 
 static const char *model_name(const SewSlave *s) { return s->d->model_name; }
 
-/* FMI 2.0's logger is printf-like: hosts and containers pass a line on as the format, so a
-   '%' in it is written out in words, as the Python FMUs' error_line does */
+/* text appended to line[*n..size), every '%' written out in words: FMI 2.0's logger is
+   printf-like (hosts and containers pass a line on as the format), so no part of a line, the
+   instance name a host gave included, may carry one (as the Python FMUs' error_line) */
+static void append_words(char *line, size_t *n, size_t size, const char *text)
+{
+    for (const char *c = text; *c && *n + 9 < size; c++) {
+        if (*c == '%') {
+            memcpy(line + *n, " percent", 8);
+            *n += 8;
+        } else {
+            line[(*n)++] = *c;
+        }
+    }
+    line[*n] = '\0';
+}
+
 static void emit(SewSlave *s, SewStatus status, const char *message)
 {
     char line[3 * SEW_WHY];
     size_t n = 0;
-    int head = snprintf(line, sizeof line, "%s (%s): ", s->instance, model_name(s));
-    if (head < 0)
-        return;
-    n = (size_t)head < sizeof line ? (size_t)head : sizeof line - 1;
-    for (const char *c = message; *c && n + 9 < sizeof line; c++) {
-        if (*c == '%') {
-            memcpy(line + n, " percent", 8);
-            n += 8;
-        } else {
-            line[n++] = *c;
-        }
-    }
-    line[n] = '\0';
+    line[0] = '\0';
+    append_words(line, &n, sizeof line, s->instance);
+    append_words(line, &n, sizeof line, " (");
+    append_words(line, &n, sizeof line, model_name(s));
+    append_words(line, &n, sizeof line, "): ");
+    append_words(line, &n, sizeof line, message);
     if (s->log)
         s->log(s->env, status, line);
 }
@@ -416,12 +423,53 @@ SewStatus sew_set(SewSlave *s, const char *call, SewKind kind, const unsigned in
 
 /* --- the life of an instance ------------------------------------------------------------------ */
 
+const char *const SEW_LOG_CATEGORIES[] = {
+    "logStatusWarning", "logStatusDiscard", "logStatusError", "logStatusFatal", "logAll", NULL,
+};
+
+SewStatus sew_check_categories(SewSlave *s, const char *call, size_t n,
+                               const char *const categories[])
+{
+    char names[256] = "";
+    if (n > 0 && !categories)
+        return sew_refuse(s, "%s: no categories given", call);
+    for (size_t i = 0; i < n; i++) {
+        int known = 0;
+        for (int k = 0; categories[i] && SEW_LOG_CATEGORIES[k]; k++)
+            known |= strcmp(categories[i], SEW_LOG_CATEGORIES[k]) == 0;
+        if (known)
+            continue;
+        for (int k = 0; SEW_LOG_CATEGORIES[k]; k++) {
+            if (k > 0)
+                strncat(names, ", ", sizeof names - strlen(names) - 1);
+            strncat(names, SEW_LOG_CATEGORIES[k], sizeof names - strlen(names) - 1);
+        }
+        /* the category, the host's text, goes through emit like every line: '%' in words */
+        return sew_refuse(s, "%s: unknown log category %s%.200s%s (known: %s); logging left as "
+                          "it was", call, categories[i] ? "'" : "",
+                          categories[i] ? categories[i] : "NULL", categories[i] ? "'" : "", names);
+    }
+    return SEW_OK;
+}
+
+SewStatus sew_check_start_time(SewSlave *s, const char *call, double start_time)
+{
+    if (!isfinite(start_time))
+        return sew_refuse(s, "%s: the start time must be finite, got %g", call, start_time);
+    if (s->model->from_time_zero && start_time < 0.0)
+        return sew_refuse(s, "%s: start time %g s refused: %s's model is a function of the "
+                          "time since its start at t = 0, defined for t >= 0 only (start at 0 "
+                          "or later)", call, start_time,
+                          model_name(s));
+    return SEW_OK;
+}
+
 SewStatus sew_enter_initialization(SewSlave *s, const char *call, double start_time)
 {
     if (s->phase != SEW_INSTANTIATED)
         return sew_refuse(s, "%s: only once, after instantiation (or a reset)", call);
-    if (!isfinite(start_time))
-        return sew_refuse(s, "%s: the start time must be finite, got %g", call, start_time);
+    if (sew_check_start_time(s, call, start_time) != SEW_OK)
+        return SEW_ERROR;
     s->time = start_time;
     s->phase = SEW_INITIALIZING;
     s->cached = 0;

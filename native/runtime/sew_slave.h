@@ -78,6 +78,16 @@ void sew_log(SewSlave *s, SewStatus status, const char *fmt, ...)
 #endif
     ;
 
+/* SEW_ERROR with the reason where the model cannot start at start_time (not finite; before 0
+   for a model of time from rest, sew_model.h's from_time_zero); SEW_OK */
+SewStatus sew_check_start_time(SewSlave *s, const char *call, double start_time);
+/* fmi2SetDebugLogging, fmi3SetDebugLogging: every category must be one the modelDescription
+   declares (SEW_LOG_CATEGORIES); SEW_ERROR naming the first that is not and the known ones */
+SewStatus sew_check_categories(SewSlave *s, const char *call, size_t n,
+                               const char *const categories[]);
+/* the LogCategories every sewfmu FMU declares (components/fmi3_layer.py, pythonfmu's), NULL
+   ended; the glue logs each line under the one of its status */
+extern const char *const SEW_LOG_CATEGORIES[];
 SewStatus sew_enter_initialization(SewSlave *s, const char *call, double start_time);
 SewStatus sew_exit_initialization(SewSlave *s, const char *call);
 SewStatus sew_terminate(SewSlave *s, const char *call);

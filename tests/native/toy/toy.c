@@ -48,7 +48,7 @@ static int toy_outputs(const double *p, const double *derived, const double *sta
 }
 
 const SewModel SEW_MODEL_Toy = {"Toy", 1, 1, toy_build, toy_initialize, toy_advance,
-                                toy_outputs};
+                                toy_outputs, 0};
 
 static const SewVariable VARIABLES[] = {
     {"k", 0u, SEW_REAL, SEW_PARAMETER, 0, 1.0, 0.0, 100.0, ""},
