@@ -364,13 +364,12 @@ def build(fmi: int = 2, dest: str | Path | None = None,
     folder = default_fmu_dir(fmi, Path(dest) if dest else None)
     if native:
         from sewfmu.scenarios.fmu_build.native import (  # the C builder: only when asked
-            build_native_fmu,
+            build_native_fmus,
             default_native_dir,
         )
 
         native_folder = default_native_dir(fmi, Path(dest) if dest else None)
-        return [build_native_fmu(name, native_folder, fmi=fmi, python_dir=folder)
-                for name in (names or list(FMUS))]
+        return build_native_fmus(names or list(FMUS), native_folder, fmi=fmi, python_dir=folder)
     return [build_fmu(name, folder, fmi=fmi) for name in (names or list(FMUS))]
 
 

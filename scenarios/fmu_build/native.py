@@ -23,7 +23,12 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
-from sewfmu.scenarios.fmu_build.native_compile import TARGETS, NoCompiler, compile_binary
+from sewfmu.scenarios.fmu_build.native_compile import (
+    TARGETS,
+    NoCompiler,
+    compile_binary,
+    left_out_line,
+)
 from sewfmu.scenarios.fmu_build.native_current import (
     NATIVE_SOURCE_DIR,
     native_fmu_dir,
@@ -121,21 +126,23 @@ def _documentation(page: bytes) -> bytes:
     return text.encode("utf-8")
 
 
-def _compile(target, sources: Path, out: Path) -> str | None:
-    """Compile one binary; the line that names a missing compiler, or None."""
+def _compile(target, sources: Path, out: Path) -> NoCompiler | None:
+    """Compile one binary; the NoCompiler of a missing compiler, or None."""
     out.parent.mkdir(parents=True, exist_ok=True)
     try:
         compile_binary(target, sources, out)
     except NoCompiler as err:
-        return str(err)
+        return err
     return None
 
 
 def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
-                     python_dir: Path | None = None) -> Path:
+                     python_dir: Path | None = None, left_out: set | None = None) -> Path:
     """Build the native FMU `name` for FMI `fmi` (2 or 3) into dest (default
     default_native_dir(fmi)); return its path. The Python FMU it is made from is taken from
-    python_dir (default fmus/, fmus/fmi3/), built there if missing or stale."""
+    python_dir (default fmus/, fmus/fmi3/), built there if missing or stale. The targets left
+    out for want of a compiler go into `left_out` (build_native_fmus says them once for all
+    its FMUs); without it, one line on stderr says them."""
     if isinstance(fmi, bool) or fmi not in FMI_VERSIONS:
         raise ValueError(f"FMI version must be 2 or 3, got {fmi!r}")
     if name not in MODEL_FILES:
@@ -177,9 +184,12 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
             else:
                 binaries[f"binaries/{target.folders[fmi]}/{out.name}"] = out.read_bytes()
         if not binaries:
-            raise NoCompiler("\n".join(missing))
-        for line in missing:
-            print(line, file=sys.stderr)
+            raise NoCompiler("; ".join(str(m) for m in missing))
+        if left_out is None and missing:
+            print(f"sewfmu: {name}: {left_out_line(m.target for m in missing)}",
+                  file=sys.stderr)
+        elif missing:
+            left_out.update(m.target for m in missing)
         built = tmp / f"{name}.fmu"
         with zipfile.ZipFile(built, "w", compression=zipfile.ZIP_DEFLATED) as fmu:
             fmu.writestr("modelDescription.xml", xml)
@@ -202,9 +212,23 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
     return out
 
 
+def build_native_fmus(names, dest: Path | None = None, fmi: int = 2,
+                      python_dir: Path | None = None) -> list[Path]:
+    """build_native_fmu of each name; the targets left out for want of a compiler are said in
+    one line on stderr for all of them (after those built: a build stopped by an error says
+    them too)."""
+    left_out: set = set()
+    try:
+        return [build_native_fmu(name, dest, fmi=fmi, python_dir=python_dir, left_out=left_out)
+                for name in names]
+    finally:
+        if left_out:
+            print(f"sewfmu: {left_out_line(left_out)}", file=sys.stderr)
+
+
 def build_all_native(dest: Path | None = None, fmi: int = 2,
                      names: list[str] | None = None) -> list[Path]:
-    return [build_native_fmu(name, dest, fmi=fmi) for name in (names or list(MODEL_FILES))]
+    return build_native_fmus(names or list(MODEL_FILES), dest, fmi=fmi)
 
 
 def _python_fmu(name: str, folder: Path, fmi: int) -> Path:

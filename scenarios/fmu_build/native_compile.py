@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sewfmu.errors import Error
+from sewfmu.scenarios.format.values import ScenarioError
 
 FLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra"]
 # the one line said where a target's compiler is missing
@@ -26,8 +27,36 @@ INSTALL_HINT = {
 }
 
 
+# a target whose compiler is missing, as the one line of a build says it: (what is left out,
+# what was looked for, how to get one)
+LEFT_OUT = {
+    "linux": ("Linux binaries", "no gcc, cc or zig",
+              "apt install gcc, or pip install 'sewfmu[native]'"),
+    "windows": ("Windows binaries", "no mingw-w64 or zig",
+                "apt install mingw-w64, or pip install 'sewfmu[native]'"),
+}
+
+
 class NoCompiler(Error, RuntimeError):
-    """No compiler for a target: the message is the one line that says what to install."""
+    """No compiler for a target: the message is the one line that says what to install;
+    `target` names the target."""
+
+    def __init__(self, message: str, target: str = ""):
+        super().__init__(message)
+        self.target = target
+
+
+class CompilerFailed(ScenarioError, RuntimeError):
+    """A compiler that is there but cannot compile even a one-line C file here (its C library's
+    headers missing, a broken install): the machine's to mend, not sewfmu's; one line."""
+
+
+def left_out_line(targets) -> str:
+    """The one line of a build (of any number of FMUs) whose binaries for `targets` were left
+    out, e.g. "Windows binaries left out: no mingw-w64 or zig; apt install mingw-w64, or pip
+    install 'sewfmu[native]'"."""
+    parts = [LEFT_OUT[t] for t in sorted(set(targets))]
+    return "; ".join(f"{what} left out: {missing}; {how}" for what, missing, how in parts)
 
 
 @dataclass(frozen=True)
@@ -67,7 +96,7 @@ def compiler_for(target: Target) -> tuple[list[str], list[str]]:
         if zig:
             return zig, ["-target", "x86_64-windows-gnu"]
     raise NoCompiler(f"sewfmu build --native: no compiler for {target.name}: needs "
-                     f"{INSTALL_HINT[target.name]}")
+                     f"{INSTALL_HINT[target.name]}", target.name)
 
 
 def compile_binary(target: Target, sources: Path, out: Path) -> None:
@@ -78,8 +107,38 @@ def compile_binary(target: Target, sources: Path, out: Path) -> None:
     args = [*command, *FLAGS, *extra, "-shared", f"-I{sources}", *files, "-o", str(out), "-lm"]
     done = subprocess.run(args, capture_output=True, text=True)
     if done.returncode != 0 or not out.exists():
+        _check_compiler(target, command, extra, out.parent)
+        # the compiler works, sewfmu's sources do not compile with it: sewfmu's bug
         raise RuntimeError(f"compiling {out.name} for {target.name} failed:\n"
                            f"{' '.join(args)}\n{done.stderr.strip()}")
     if done.stderr.strip():
         # warnings are shown, not fatal: tests/native holds the sources warning-free
         print(f"{out.name} ({target.name}): {done.stderr.strip()}", file=sys.stderr)
+
+
+def _first_error(stderr: str) -> str:
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    return next((line for line in lines if "error" in line.lower()), lines[0] if lines else
+                "no message")
+
+
+def _check_compiler(target: Target, command: list[str], extra: list[str], folder: Path) -> None:
+    """CompilerFailed where the compiler cannot build a one-line C file with the headers the
+    FMUs include either (the machine's fault); else nothing (the FMU's sources are at fault)."""
+    probe = folder / "sewfmu_probe.c"
+    probe.write_text("#include <math.h>\n#include <stdio.h>\n#include <stdlib.h>\n"
+                     "#include <string.h>\nint sewfmu_probe(double x) { return (int)floor(x); }\n")
+    out = folder / f"sewfmu_probe{target.suffix}"
+    done = subprocess.run([*command, *FLAGS, *extra, "-shared", str(probe), "-o", str(out),
+                           "-lm"], capture_output=True, text=True)
+    if done.returncode == 0 and out.exists():
+        return
+    first = _first_error(done.stderr).replace(str(probe), probe.name)
+    if target.name == "windows":
+        hint = "is mingw-w64 complete? (apt install mingw-w64)"
+    elif "no such file" in first.lower() or ".h" in first:
+        hint = "is libc6-dev installed? (apt install libc6-dev)"
+    else:
+        hint = "check that compiler's installation, or pip install 'sewfmu[native]' (ziglang)"
+    raise CompilerFailed(f"sewfmu build --native: the C compiler {' '.join(command)} for "
+                         f"{target.name} cannot compile a one-line C file: {first}; {hint}")

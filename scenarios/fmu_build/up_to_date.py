@@ -8,6 +8,7 @@ native FMUs of the same names instead (fmus/native/: native_current.py says when
 current; the builder, native.py, is imported only to build one)."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from sewfmu.components.registry import FMUS
@@ -31,21 +32,30 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2, kind: str = "pyt
     dest = Path(dest or (native_fmu_dir(fmi) if native else default_fmu_dir(fmi)))
     version = native_version() if native else current_version()
     paths = {}
-    for name in names:
-        path = dest / f"{name}.fmu"
-        if fmu_version(path) != version:
-            if native:
-                path = _build_native(name, dest, fmi, python_dir)
-            else:
-                from sewfmu.scenarios.fmu_build.build import build_fmu  # the builders: only to build
-                build_fmu(name, dest, fmi=fmi)
-        paths[name] = path
+    left_out: set = set()       # targets no compiler was found for: one line for the run
+    try:
+        for name in names:
+            path = dest / f"{name}.fmu"
+            if fmu_version(path) != version:
+                if native:
+                    path = _build_native(name, dest, fmi, python_dir, left_out=left_out)
+                else:
+                    from sewfmu.scenarios.fmu_build.build import build_fmu  # only to build
+                    build_fmu(name, dest, fmi=fmi)
+            paths[name] = path
+    finally:
+        if left_out:
+            # the compilers' module: only where a native FMU was built
+            from sewfmu.scenarios.fmu_build.native_compile import left_out_line
+            print(f"sewfmu: {left_out_line(left_out)}", file=sys.stderr)
     return paths
 
 
-def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None) -> Path:
-    """native.build_native_fmu (a C compiler's builder: imported only to build); a native FMU
-    that cannot be made here (no builder, a model without its C twin yet) is one line."""
+def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None,
+                  left_out: set | None = None) -> Path:
+    """native.build_native_fmu (a C compiler's builder: imported only to build), the targets
+    it leaves out for want of a compiler into `left_out`; a native FMU that cannot be made here
+    (no builder, a model without its C twin yet, a broken compiler) is one line."""
     try:
         # the native builder (C compilers, the FMUs' C sources): only to build one
         from sewfmu.scenarios.fmu_build.native import build_native_fmu
@@ -53,8 +63,9 @@ def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None) -> P
         raise ScenarioError(f"experiment.fmus = \"native\": this sewfmu cannot build native "
                             f"FMUs ({err}); run with experiment.fmus = \"python\"") from None
     try:
-        return Path(build_native_fmu(name, dest, fmi=fmi, python_dir=python_dir))
-    except Error:                       # no compiler: its one line says what to install
+        return Path(build_native_fmu(name, dest, fmi=fmi, python_dir=python_dir,
+                                     left_out=left_out))
+    except Error:                       # no compiler, a broken one: its one line says why
         raise
     except (FileNotFoundError, KeyError, RuntimeError) as err:
         # a compiler's refusal is many lines: the first error here, all of them from the build

@@ -221,7 +221,7 @@ def test_a_stale_or_missing_native_fmu_is_built_and_a_current_one_is_not(shaft_f
     _, python, _ = shaft_fmus
     built = []
 
-    def builder(name, dest, fmi, python_dir):
+    def builder(name, dest, fmi, python_dir, left_out=None):
         built.append((name, Path(dest), fmi))
         assert python_dir == default_fmu_dir(fmi, tmp_path)      # made from these Python FMUs
         return stand_in(python, Path(dest))
