@@ -3,8 +3,8 @@
 ~/.cache/sewfmu/fmus; SEWFMU_CACHE_DIR="" turns it off. That folder may be the user's, so
 sewfmu keeps to its subfolder SUBFOLDER there: the extracted FMUs (scenarios/cosim/fmu_cache.py),
 in its folder "declared-units" the FMUs' declared units (scenarios/format/declared_units.py),
-and in its folder "stepper" the compiled step loop (scenarios/cosim/stepper.py). A module of its own, light, so that a scenario's checks find the folder
-without the engine."""
+and in its folder "stepper" the compiled step loop (scenarios/cosim/stepper.py). A module of
+its own, light, so that a scenario's checks find the folder without the engine."""
 from __future__ import annotations
 
 import os
