@@ -16,6 +16,7 @@ native FMUs' builder finds its own) into the folder FOLDER of sewfmu's cache
 """
 from __future__ import annotations
 
+import atexit
 import contextlib
 import ctypes
 import functools
@@ -219,7 +220,12 @@ def library():
     """jacobi_loop.c compiled and loaded (its function typed), or None (a debug line says why)."""
     if not _loaded:
         try:
-            lib = ctypes.CDLL(str(_compiled()))
+            path, scratch = _compiled()
+            try:
+                lib = ctypes.CDLL(str(path))
+            finally:
+                if scratch is not None:
+                    _drop_scratch(scratch)
             lib.sew_jacobi_steps.argtypes = [ctypes.POINTER(SewRun), _q]
             lib.sew_jacobi_steps.restype = ctypes.c_int
         except Exception as err:         # no compiler, a failed compile: the Python loop
@@ -247,8 +253,20 @@ def _host_compiler() -> tuple[list[str], list[str]]:
     return command, flags + ([] if sys.platform == "win32" else ["-fPIC"])
 
 
-def _compiled() -> Path:
-    """The library's file: from the cache, or compiled now (into it where it can be written)."""
+def _drop_scratch(folder: Path) -> None:
+    """Remove the temporary folder a library was compiled into (the cache off or unwritable):
+    on Linux and macOS at once, the loaded library stays mapped; on Windows, where a loaded DLL
+    cannot be removed, at exit (what is loaded then stays: best effort)."""
+    if sys.platform == "win32":
+        atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    else:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _compiled() -> tuple[Path, Path | None]:
+    """The library's file: from the cache, or compiled now (into it where it can be written);
+    and the temporary folder it was compiled into where the cache is off or unwritable (the
+    caller removes it once the library is loaded), else None."""
     import subprocess  # only to compile, once per cache
 
     command, flags = _host_compiler()
@@ -264,6 +282,7 @@ def _compiled() -> Path:
         lock.acquire(timeout=60)
     except (AttributeError, OSError, filelock.Timeout):
         folder, lock = Path(tempfile.mkdtemp(prefix="sewfmu-stepper-")), None
+    scratch_folder = folder if lock is None else None
     try:
         out = folder / name
         if not out.is_file():
@@ -279,7 +298,11 @@ def _compiled() -> Path:
                     for path in (stale, folder / f".{stale.name}.lock"):
                         with contextlib.suppress(OSError):
                             path.unlink()
-        return out
+        return out, scratch_folder
+    except BaseException:
+        if scratch_folder is not None:
+            shutil.rmtree(scratch_folder, ignore_errors=True)
+        raise
     finally:
         if lock is not None:
             lock.release()
