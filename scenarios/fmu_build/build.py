@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import os
 import shutil
 import sys
-import tempfile
 import zipfile
 from pathlib import Path
 
@@ -31,6 +29,7 @@ import pythonfmu3  # noqa: F401
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
 from sewfmu.scenarios.fmu_build import documentation as fmu_documentation
 from sewfmu.scenarios.fmu_build.carried_reference import carry, default_experiment_output
+from sewfmu.scenarios.fmu_build.install import install, scratch_folder, writable
 
 # what an FMU is made from and its version: sources.py, which a run imports without this builder
 from sewfmu.scenarios.fmu_build.sources import (  # noqa: F401
@@ -130,7 +129,7 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
     if name not in FMUS:
         raise KeyError(f"unknown FMU {name!r} (known: {', '.join(FMUS)})")
     dest = Path(dest or default_fmu_dir(fmi))
-    dest.mkdir(parents=True, exist_ok=True)
+    writable(dest, "sewfmu build")
     module, slave = FMUS[name]
     source = Path(source)
     tag = model_code_hash(source)
@@ -140,7 +139,7 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
     other_layer = "fmi2_layer" if fmi == 3 else "fmi3_layer"
     script_module = f"{prefix}_{name}_{tag}"
     slave_doc = getattr(importlib.import_module(f"sewfmu.components.{module}"), slave).__doc__.strip()
-    with tempfile.TemporaryDirectory(prefix="sewfmu_build_") as tmp:
+    with scratch_folder("build") as tmp:
         tmp = Path(tmp)
         pkg_dir = tmp / package
         pkg_dir.mkdir()
@@ -180,11 +179,7 @@ def build_fmu(name: str, dest: Path | None = None, source: Path = MODEL_CODE_DIR
             fmu_documentation.write(built, copied, fmi)
             if fmi == 3:
                 _describe_sources(built, name)
-            # replace atomically: another process may be reading the old FMU right now
-            out = dest / f"{name}.fmu"
-            staged = dest / f".{name}.fmu.{os.getpid()}"
-            shutil.copy2(built, staged)
-            os.replace(staged, out)
+            out = install(built, dest, name, "sewfmu build")
         finally:
             # the builder imports the copies; forget them so this process keeps no stale modules
             sys.path[:] = saved_path

@@ -12,17 +12,15 @@ from __future__ import annotations
 
 import hashlib
 import importlib
-import os
 import re
-import shutil
 import sys
-import tempfile
 import zipfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from xml.etree import ElementTree
 
 from sewfmu.components.registry import FMI_VERSIONS, FMUS
+from sewfmu.scenarios.fmu_build.install import install, scratch_folder, writable
 from sewfmu.scenarios.fmu_build.native_compile import (
     TARGETS,
     NoCompiler,
@@ -66,6 +64,7 @@ FMI_FILES = {
     3: ("fmi3_glue.c", "fmi3_glue.h", "fmi3_unsupported.c", "fmi3/fmi3Functions.h",
         "fmi3/fmi3FunctionTypes.h", "fmi3/fmi3PlatformTypes.h"),
 }
+REBUILD = "sewfmu build --native"        # said where the FMU folder cannot take the build
 _INCLUDE = re.compile(rb'^\s*#\s*include\s+"([^"]+)"', re.MULTILINE)
 
 HOST_NEEDS = (
@@ -164,9 +163,9 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
     sources = dict(sorted(sources.items()))
     xml = native_model_description(python_xml, fmi, token, native_version(),
                                    list(sources))
-    dest.mkdir(parents=True, exist_ok=True)
+    writable(dest, REBUILD)
     missing = []
-    with tempfile.TemporaryDirectory(prefix="sewfmu_native_") as tmp:
+    with scratch_folder("native") as tmp:
         tmp = Path(tmp)
         source_dir = tmp / "sources"
         source_dir.mkdir()
@@ -204,12 +203,7 @@ def build_native_fmu(name: str, dest: Path | None = None, fmi: int = 2,
                 if path == "documentation/index.html":
                     data = _documentation(data)
                 fmu.writestr(path, data)
-        # replace atomically: another process may be reading the old FMU right now
-        out = dest / f"{name}.fmu"
-        staged = dest / f".{name}.fmu.{os.getpid()}"
-        shutil.copy2(built, staged)
-        os.replace(staged, out)
-    return out
+        return install(built, dest, name, REBUILD)
 
 
 def build_native_fmus(names, dest: Path | None = None, fmi: int = 2,
