@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sewfmu.errors import Error
+from sewfmu.scenarios.fmu_build.native_current import TARGET_FOLDERS
 from sewfmu.scenarios.format.values import ScenarioError
 
 FLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra"]
@@ -67,8 +68,8 @@ class Target:
 
 
 TARGETS = (
-    Target("linux", ".so", {2: "linux64", 3: "x86_64-linux"}),
-    Target("windows", ".dll", {2: "win64", 3: "x86_64-windows"}),
+    Target("linux", ".so", TARGET_FOLDERS["linux"]),
+    Target("windows", ".dll", TARGET_FOLDERS["windows"]),
 )
 
 

@@ -21,6 +21,12 @@ from sewfmu.scenarios.fmu_build.sources import MODEL_CODE_DIR, current_version, 
 NATIVE_SOURCE_DIR = MODEL_CODE_DIR.parent / "native"
 SOURCE_SUFFIXES = (".c", ".h")
 NATIVE_FOLDER = "native"        # fmus/native/, fmus/native/fmi3/
+# each target's folder under binaries/, by FMI version (native_compile.TARGETS compiles for them)
+TARGET_FOLDERS = {"linux": {2: "linux64", 3: "x86_64-linux"},
+                  "windows": {2: "win64", 3: "x86_64-windows"}}
+# an FMU file's (path, inode, size, mtime) -> the targets it holds a binary for, for this
+# process's lifetime (as sources.fmu_version's versions)
+_HELD: dict[tuple, frozenset] = {}
 
 
 def native_fmu_dir(fmi: int = 2, base: Path | None = None) -> Path:
@@ -67,3 +73,32 @@ def build_of(path: Path) -> str:
         return "unknown"
     return "python" if any(n.startswith("resources/") and n.endswith(".py") for n in names) \
         else "native"
+
+
+def missing_targets(path: Path) -> list[str]:
+    """The targets (TARGET_FOLDERS) a native FMU holds no binary for (built where a compiler
+    was missing), sorted; its zip read once per process while the file is unchanged (stat)."""
+    try:
+        st = os.stat(path)
+        key = (str(path), st.st_ino, st.st_size, st.st_mtime_ns)
+        if key not in _HELD:
+            with zipfile.ZipFile(path) as archive:
+                folders = {n.split("/")[1] for n in archive.namelist()
+                           if n.startswith("binaries/") and n.count("/") >= 2}
+            _HELD[key] = frozenset(t for t, by_fmi in TARGET_FOLDERS.items()
+                                   if folders & set(by_fmi.values()))
+    except (OSError, zipfile.BadZipFile):
+        return []
+    return sorted(set(TARGET_FOLDERS) - _HELD[key])
+
+
+def without_windows_line(paths: dict[str, Path], what: str) -> str | None:
+    """The one line of an export (`what`: "export-fmu") whose native FMUs lack the Windows
+    binary (built where no Windows compiler was), or None."""
+    lacking = [name for name, path in sorted(paths.items())
+               if build_of(Path(path)) == "native" and "windows" in missing_targets(Path(path))]
+    if not lacking:
+        return None
+    return (f"{what}: the native FMUs {', '.join(lacking)} inside have no Windows binary "
+            f"(built without a Windows compiler): the export cannot run on Windows; apt install "
+            f"mingw-w64, or pip install 'sewfmu[native]', then export again")

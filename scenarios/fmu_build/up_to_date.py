@@ -8,12 +8,17 @@ native FMUs of the same names instead (fmus/native/: native_current.py says when
 current; the builder, native.py, is imported only to build one)."""
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 from sewfmu.components.registry import FMUS
 from sewfmu.errors import Error
-from sewfmu.scenarios.fmu_build.native_current import native_fmu_dir, native_version
+from sewfmu.scenarios.fmu_build.native_current import (
+    missing_targets,
+    native_fmu_dir,
+    native_version,
+)
 from sewfmu.scenarios.fmu_build.sources import current_version, default_fmu_dir, fmu_version
 from sewfmu.scenarios.format.fmu_file import (
     fmu_path,
@@ -36,7 +41,10 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2, kind: str = "pyt
     try:
         for name in names:
             path = dest / f"{name}.fmu"
-            if fmu_version(path) != version:
+            current = fmu_version(path) == version
+            if current and native and _completable(path, dest):
+                path = _complete_native(name, dest, fmi, python_dir, left_out, path)
+            elif not current:
                 if native:
                     path = _build_native(name, dest, fmi, python_dir, left_out=left_out)
                 else:
@@ -49,6 +57,37 @@ def ensure_built(names, dest: Path | None = None, fmi: int = 2, kind: str = "pyt
             from sewfmu.scenarios.fmu_build.native_compile import left_out_line
             print(f"sewfmu: {left_out_line(left_out)}", file=sys.stderr)
     return paths
+
+
+def _completable(path: Path, dest: Path) -> bool:
+    """A current native FMU without the binary of a target a compiler is found for now (built
+    before mingw-w64 or zig was installed), in a folder it can be rebuilt in: out of date. The
+    zip is read only for a current native FMU, once per process while unchanged; the compilers
+    looked for only where a binary is missing."""
+    missing = missing_targets(path)
+    if not missing or not os.access(dest, os.W_OK):
+        return False
+    # the compilers' module: only where a current FMU lacks a binary
+    from sewfmu.scenarios.fmu_build.native_compile import TARGETS, NoCompiler, compiler_for
+    for target in TARGETS:
+        if target.name in missing:
+            try:
+                compiler_for(target)
+            except NoCompiler:
+                continue
+            return True
+    return False
+
+
+def _complete_native(name: str, dest: Path, fmi: int, python_dir: Path | None,
+                     left_out: set, current: Path) -> Path:
+    """The native FMU rebuilt with the binaries it lacked; where that fails (a compiler that
+    cannot compile), the current one, said in one line: a run here needs no other binary."""
+    try:
+        return _build_native(name, dest, fmi, python_dir, left_out=left_out)
+    except Error as err:
+        print(f"sewfmu: {name}: kept without the binaries it lacks: {err}", file=sys.stderr)
+        return current
 
 
 def _build_native(name: str, dest: Path, fmi: int, python_dir: Path | None,

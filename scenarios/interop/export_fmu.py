@@ -33,6 +33,7 @@ from __future__ import annotations
 import html
 import json
 import shutil
+import sys
 import tempfile
 import uuid
 import zipfile
@@ -46,7 +47,7 @@ from sewfmu.scenarios.cosim.fmi_calls import kind_of
 from sewfmu.scenarios.cosim.master import run
 from sewfmu.scenarios.cosim.system import check_parameters
 from sewfmu.scenarios.files.outputs import OutputError
-from sewfmu.scenarios.fmu_build.native_current import build_of
+from sewfmu.scenarios.fmu_build.native_current import build_of, without_windows_line
 from sewfmu.scenarios.fmu_build.sources import current_version
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for_names
 from sewfmu.scenarios.format.fmu_file import model_description
@@ -80,6 +81,8 @@ def export_fmu(scenario: Scenario, output: Path, fmu_paths: dict[str, Path],
     if scenario.fmus == "native":
         _refuse_python_inside(scenario, fmu_paths)
     inside = _components_inside(scenario, fmu_paths)
+    if scenario.fmus == "native" and (line := without_windows_line(inside, "export-fmu")):
+        print(f"sewfmu: {line}", file=sys.stderr)
     described = {name: model_description(path, "", validate=False)
                  for name, path in inside.items()}
     # what `sewfmu run` refuses before any FMU runs, then what it refuses running

@@ -9,6 +9,7 @@ annotation in the DefaultExperiment carries it for `sewfmu run FILE.ssp`.
 """
 from __future__ import annotations
 
+import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -17,6 +18,7 @@ from xml.etree import ElementTree as ET
 from sewfmu.components.units import UNITS
 from sewfmu.scenarios.cosim.algorithms import ALGORITHMS
 from sewfmu.scenarios.cosim.fmi_calls import kind_of
+from sewfmu.scenarios.fmu_build.native_current import without_windows_line
 from sewfmu.scenarios.fmu_build.up_to_date import fmus_for
 from sewfmu.scenarios.format.experiment import ssp_settings
 from sewfmu.scenarios.format.fmu_file import model_description
@@ -140,4 +142,7 @@ def export_ssp(scenario: Scenario, path: Path, fmu_paths: dict[str, Path]) -> Pa
 
 def export(scenario: Scenario, path: Path, fmu_dir: Path | None = None) -> Path:
     """The scenario as an SSP 1.0 archive for other co-simulation tools."""
-    return export_ssp(scenario, Path(path), fmus_for(scenario, fmu_dir))
+    paths = fmus_for(scenario, fmu_dir)
+    if scenario.fmus == "native" and (line := without_windows_line(paths, "export-ssp")):
+        print(f"sewfmu: {line}", file=sys.stderr)
+    return export_ssp(scenario, Path(path), paths)
