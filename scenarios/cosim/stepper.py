@@ -12,7 +12,8 @@ before (a debug line says why); SEWFMU_STEP_LOOP=python makes every run take it 
 
 The library is compiled once, on first use, with a C compiler of this machine (found as the
 native FMUs' builder finds its own) into the folder FOLDER of sewfmu's cache
-(files/cache_root.py), or a temporary folder where the cache is off or cannot be written.
+(files/cache_root.py), or a temporary folder where the cache is off or cannot be written,
+removed once the library is loaded (_drop_scratch).
 """
 from __future__ import annotations
 
