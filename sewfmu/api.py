@@ -362,6 +362,9 @@ def build(fmi: int = 2, dest: str | Path | None = None,
             raise ScenarioError(f"unknown FMU {name!r}{did_you_mean(name, FMUS)} "
                                 f"(known: {', '.join(FMUS)})")
     folder = default_fmu_dir(fmi, Path(dest) if dest else None)
+    # the folder the user named made here: one it cannot be is their OSError, which the
+    # guard words as "build: '<dest>': <reason>" (a rebuild in a run says it its own way)
+    folder.mkdir(parents=True, exist_ok=True)
     if native:
         from sewfmu.scenarios.fmu_build.native import (  # the C builder: only when asked
             build_native_fmus,
