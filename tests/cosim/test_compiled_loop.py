@@ -83,8 +83,8 @@ def _same_records(a, b) -> None:
         assert np.array_equal(ca[column], cb[column]), column
 
 
-@pytest.mark.parametrize("fmi", [2, 3])
-@pytest.mark.parametrize("scenario", SCENARIOS)
+# FMI 3.0 on punch_drive alone: the loop's FMI 3.0 calls, to keep CI within its time
+@pytest.mark.parametrize("scenario, fmi", [(s, 2) for s in SCENARIOS] + [("punch_drive", 3)])
 def test_the_compiled_loop_records_the_python_loops_numbers(scenario, fmi, fmu_dir, fmu3_dir,
                                                             monkeypatch, chunks):
     (compiled, result, error), (python, expected, _) = _both(

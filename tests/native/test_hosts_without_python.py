@@ -40,6 +40,11 @@ pytestmark = [pytest.mark.slow, pytest.mark.interop]
 
 CASES = [(name, fmi) for fmi in (2, 3) for name in FMUS]
 IDS = [f"{name}-fmi{fmi}" for name, fmi in CASES]
+# under Wine the refusals and the state are the runtime's, the same for every model: a stateless
+# FMU and two with state, each version (Wine's runs cost a second each)
+WINE_CASES = [(name, fmi) for fmi in (2, 3) for name in ("MainShaft", "PunchContact",
+                                                         "CarriageModal")]
+WINE_IDS = [f"{name}-fmi{fmi}" for name, fmi in WINE_CASES]
 KIND = {"Real": "r", "Float64": "r", "Integer": "i", "Int32": "i", "Boolean": "b"}
 GARBLINGS = ("all", "header", "middle", "last", "truncated")
 
@@ -241,7 +246,7 @@ def test_each_refusal_is_an_error_on_linux(native_fmus, linux_host, name, fmi):
     assert not wrong, "\n".join(wrong)
 
 
-@pytest.mark.parametrize("name,fmi", CASES, ids=IDS)
+@pytest.mark.parametrize("name,fmi", WINE_CASES, ids=WINE_IDS)
 def test_each_refusal_is_an_error_under_wine(request, native_fmus, windows_host, name, fmi):
     _, unzipped, md = native_fmus.get(name, fmi)
     wine = request.getfixturevalue("wine")
@@ -268,7 +273,7 @@ def test_the_state_goes_round_on_linux(native_fmus, linux_host, linux_runs, name
     _assert_round_trip(proc, linux_runs, name, fmi, exact=True)
 
 
-@pytest.mark.parametrize("name,fmi", CASES, ids=IDS)
+@pytest.mark.parametrize("name,fmi", WINE_CASES, ids=WINE_IDS)
 def test_the_state_goes_round_under_wine(request, native_fmus, windows_host, linux_runs, name,
                                          fmi):
     _, unzipped, md = native_fmus.get(name, fmi)
