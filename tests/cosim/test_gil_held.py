@@ -203,7 +203,8 @@ def test_a_sweep_point_holding_the_lock_beyond_step_timeout_fails_and_the_others
 CI_ORDER = "Ctrl-C lost in CI's order after the fast loop (not understood yet)"
 
 
-@pytest.mark.xfail(strict=False, reason=CI_ORDER)
+# skipped, not xfail: failing, it waits out a 30 s timeout of CI's time
+@pytest.mark.skip(reason=CI_ORDER)
 def test_a_users_script_is_told_at_the_first_ctrl_c_and_ended_at_the_second(tmp_path, fmus):
     script = tmp_path / "script.py"
     script.write_text("import sewfmu, sys\n"
