@@ -21,7 +21,8 @@ from fmpy.validation import validate_fmu
 from sewfmu.scenarios.fmu_build.native import MODEL_FILES, MODELS, RUNTIME
 from tests.native.fmpy_native import Instance, reference_of, worst_relative
 
-FMUCHECK = Path(os.environ.get("SEWFMU_FMUCHECK", "/work/shared/tools/fmuCheck.linux64"))
+# the checker as every host test finds it: SEWFMU_FMUCHECK (.ci/run sets it), else skipped
+FMUCHECK = Path(os.environ.get("SEWFMU_FMUCHECK", "") or "/nonexistent/fmuCheck")
 SLOW = pytest.mark.slow
 
 
